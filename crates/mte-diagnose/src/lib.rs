@@ -1,1 +1,60 @@
 #![doc = include_str!("../README.md")]
+
+mod adapters;
+mod basis;
+pub mod candidate;
+pub mod data;
+pub mod dataset;
+pub mod engine;
+mod fit;
+pub mod report;
+pub mod structure;
+pub mod term;
+
+pub use candidate::{Alternatives, Candidate, SlotEffect, SlotRole, physical_effects};
+pub use data::{Observations, Variable, VariableKind};
+pub use dataset::{Manifest, Prepared, load};
+pub use engine::{DiagnoseParams, Diagnosis, Finding, FitQuality, diagnose};
+pub use structure::StructureTest;
+pub use term::{Estimate, Family, Quantity, Summary, Term};
+
+/// What can go wrong in a diagnosis.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum DiagnoseError {
+    /// The observations or the model are malformed.
+    #[error("invalid data in {field}: {detail}")]
+    InvalidData {
+        /// The field or column.
+        field: String,
+        /// What is wrong.
+        detail: String,
+    },
+    /// The base model cannot be identified from these data.
+    #[error("the base model is not identifiable from these data; these parameter combinations cannot be told apart: {}", combinations.join("; "))]
+    NotIdentifiable {
+        /// The undetermined combinations, e.g. "EX0B − 1.00·EX0C".
+        combinations: Vec<String>,
+    },
+    /// Too few observations for the base model and cross-validation.
+    #[error(
+        "{observations} observations are too few: the base model and {needed} cross-validation need at least {needed}"
+    )]
+    TooFewObservations {
+        /// How many there are.
+        observations: usize,
+        /// How many are needed.
+        needed: usize,
+    },
+    /// A dataset file could not be read or parsed.
+    #[error("{path}: {detail}")]
+    Dataset {
+        /// The file.
+        path: String,
+        /// What is wrong, with the line or field.
+        detail: String,
+    },
+}
+
+/// Result of this crate.
+pub type Result<T> = std::result::Result<T, DiagnoseError>;

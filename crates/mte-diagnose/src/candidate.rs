@@ -1,0 +1,390 @@
+//! Candidate extensions: the extension point ([`Candidate`]) and the library of physical effects
+//! built from how each kinematic error slot reaches the observations.
+
+use mte_linalg::{DMat, DVec};
+
+use crate::basis::{legendre_columns, periods_to_scan, sin_cos_columns, time_constants_to_scan};
+use crate::data::{Observations, VariableKind};
+use crate::term::{Family, Quantity, Summary, Term};
+
+/// A candidate extension of the model: one physical cause, possibly with a hyper-parameter
+/// (a period, a time constant) that the data must choose.
+///
+/// Implement it to add an effect of your own; the diagnosis tries it beside the library.
+///
+/// ```
+/// use mte_diagnose::{Candidate, Family, Observations, Quantity, Term};
+/// use mte_linalg::DVec;
+/// /// A constant offset of every reading of the first channel (e.g. a sensor zero error).
+/// struct SensorZero;
+/// impl Candidate for SensorZero {
+///     fn variants(&self, obs: &Observations) -> Vec<Term> {
+///         let column = DVec::from_fn(obs.len(), |i, _| if obs.channel[i] == 0 { 1.0 } else { 0.0 });
+///         vec![Term::single("zero", "sensor zero error", "a constant offset of the sensor", Family::Custom, column, Quantity::Length)]
+///     }
+/// }
+/// ```
+pub trait Candidate: Send + Sync {
+    /// The candidate's design on these observations. Several terms are alternatives of the same
+    /// cause (e.g. one per period of a scan): the diagnosis tries the one that explains most,
+    /// and counts all of them when it judges significance.
+    fn variants(&self, obs: &Observations) -> Vec<Term>;
+
+    /// Improves the best of the variants once it is known (e.g. refines a scanned period),
+    /// given `score`, the weighted residual sum of squares that a term leaves. `None` keeps
+    /// the variant as it is.
+    fn refine(&self, _best: usize, _score: &dyn Fn(&Term) -> f64) -> Option<Term> {
+        None
+    }
+}
+
+impl Candidate for Term {
+    fn variants(&self, _obs: &Observations) -> Vec<Term> {
+        vec![self.clone()]
+    }
+}
+
+/// How a kinematic error slot depends on the machine's state.
+#[derive(Debug, Clone, PartialEq)]
+#[non_exhaustive]
+pub enum SlotRole {
+    /// A constant: location error of a rotary axis, assembly or setup error.
+    Constant {
+        /// Location, Setup or Squareness.
+        family: Family,
+    },
+    /// A component error of the axis named `axis`, a function of its coordinate.
+    Component {
+        /// Axis (covariate) name.
+        axis: String,
+        /// The positioning error along the axis' own direction (EXX, EYY, ECC …).
+        positioning: bool,
+        /// A straightness error (its linear part is a squareness, named separately).
+        straightness: bool,
+    },
+}
+
+/// One kinematic error slot as the observations see it.
+#[derive(Debug, Clone)]
+pub struct SlotEffect {
+    /// ISO 230-1 name (`EXX`, `EX0C`, `EC0Y`).
+    pub name: String,
+    /// What engineers call it.
+    pub label: String,
+    /// One sentence of physical meaning.
+    pub meaning: String,
+    /// mm or rad.
+    pub quantity: Quantity,
+    /// How it depends on the state.
+    pub role: SlotRole,
+    /// First-order change of every observation per unit error (n).
+    pub column: DVec,
+    /// The measurement that would separate it from what it is confounded with, if known.
+    pub separated_by: Option<String>,
+}
+
+/// The library of physical effects on a set of kinematic error slots: missing constants
+/// (location, squareness, setup), component errors as low-order polynomials, scale errors,
+/// periodic positioning errors with unknown period, reversal errors, and thermal drift (linear
+/// and first-order exponential) of constants. `drifting` lists further terms (usually the base
+/// model's constants) whose drift in time is a candidate too.
+pub fn physical_effects(
+    obs: &Observations,
+    slots: &[SlotEffect],
+    drifting: &[&Term],
+) -> Vec<Box<dyn Candidate>> {
+    let mut out: Vec<Box<dyn Candidate>> = Vec::new();
+    let time = obs
+        .variable_of_kind(VariableKind::Time)
+        .filter(|t| varies(&t.values))
+        .map(|t| t.values.clone());
+    let direction = obs
+        .variable_of_kind(VariableKind::Direction)
+        .filter(|d| varies(&d.values))
+        .map(|d| d.values.clone());
+    let n = obs.len();
+    let times = time.as_deref();
+    for slot in slots {
+        if slot.column.iter().all(|v| v.abs() < 1e-15) {
+            continue;
+        }
+        let term = |suffix: &str,
+                    label: String,
+                    meaning: String,
+                    family: Family,
+                    cols: DMat,
+                    q: Quantity| Term {
+            name: format!("{}{suffix}", slot.name),
+            label,
+            meaning,
+            family,
+            coefficients: (0..cols.ncols())
+                .map(|k| (coefficient_name(&slot.name, suffix, k, cols.ncols()), q))
+                .collect(),
+            columns: cols,
+            summary: Summary::EachCoefficient,
+            exposed_by: None,
+            separated_by: slot.separated_by.clone(),
+        };
+        match &slot.role {
+            SlotRole::Constant { family } => {
+                let t = term(
+                    "",
+                    slot.label.clone(),
+                    slot.meaning.clone(),
+                    family.clone(),
+                    column_matrix(&slot.column),
+                    slot.quantity,
+                );
+                if let Some(t_values) = times {
+                    out.extend(drift_candidates(&t, t_values));
+                }
+                out.push(Box::new(t));
+            }
+            SlotRole::Component {
+                axis,
+                positioning,
+                straightness,
+            } => {
+                let Some(v) = obs.variable(axis).filter(|v| varies(&v.values)) else {
+                    continue;
+                };
+                let rotary = v.kind == VariableKind::RotaryAxis;
+                let modulate =
+                    |m: &DMat| DMat::from_fn(n, m.ncols(), |i, j| slot.column[i] * m[(i, j)]);
+                if *positioning && !rotary {
+                    let cols = DMat::from_fn(n, 1, |i, _| slot.column[i] * v.values[i]);
+                    out.push(Box::new(
+                        term(
+                            " scale",
+                            format!("scale error of {axis} ({})", slot.name),
+                            format!("positioning error of {axis} growing linearly with position: a scale (pitch or thermal expansion) error of its measuring system"),
+                            Family::Scale,
+                            cols,
+                            Quantity::Ratio,
+                        )
+                        .exposed_by(axis.clone()),
+                    ));
+                }
+                // The linear part of a straightness is a squareness, which the catalogue names.
+                let first = if *straightness || (*positioning && !rotary) {
+                    2
+                } else {
+                    1
+                };
+                for degree in first..=3 {
+                    let cols = modulate(&legendre_columns(&v.values, first..=degree));
+                    out.push(Box::new(
+                        term(
+                            &format!(" poly{degree}"),
+                            format!("{} of {axis}, polynomial up to degree {degree}", slot.label),
+                            format!("{} varying smoothly along {axis}", slot.meaning),
+                            Family::Component { degree },
+                            cols,
+                            slot.quantity,
+                        )
+                        .exposed_by(axis.clone()),
+                    ));
+                }
+                if *positioning {
+                    let column = slot.column.clone();
+                    let values = v.values.clone();
+                    let (name, axis_name, slot_name, quantity) = (
+                        slot.name.clone(),
+                        axis.clone(),
+                        slot.name.clone(),
+                        slot.quantity,
+                    );
+                    let separated_by = slot.separated_by.clone();
+                    let make = move |p: f64| {
+                        let cols = sin_cos_columns(&values, p);
+                        Term {
+                            name: format!("{name} periodic"),
+                            label: format!(
+                                "periodic positioning error of {axis_name} ({slot_name})"
+                            ),
+                            meaning: format!(
+                                "positioning error of {axis_name} repeating every {} (ball-screw pitch, encoder or gear error)",
+                                format_period(p, rotary)
+                            ),
+                            family: Family::Periodic { period: p },
+                            columns: DMat::from_fn(column.len(), 2, |i, j| {
+                                column[i] * cols[(i, j)]
+                            }),
+                            coefficients: vec![
+                                (format!("{name} periodic sin"), quantity),
+                                (format!("{name} periodic cos"), quantity),
+                            ],
+                            summary: Summary::Amplitude,
+                            exposed_by: Some(axis_name.clone()),
+                            separated_by: separated_by.clone(),
+                        }
+                    };
+                    let grid = periods_to_scan(&v.values, rotary);
+                    if !grid.is_empty() {
+                        out.push(Box::new(Scan {
+                            grid,
+                            refine_grid: !rotary,
+                            make: Box::new(make),
+                        }));
+                    }
+                    if let Some(d) = &direction {
+                        let cols = DMat::from_fn(n, 1, |i, _| slot.column[i] * 0.5 * d[i]);
+                        out.push(Box::new(
+                            term(
+                                " reversal",
+                                format!("reversal error of {axis} ({})", slot.name),
+                                format!("{axis} stops short by a different amount depending on the direction of approach (backlash, friction, encoder hysteresis); the value is the + minus − difference"),
+                                Family::Reversal,
+                                cols,
+                                slot.quantity,
+                            )
+                            .exposed_by("direction"),
+                        ));
+                    }
+                }
+            }
+        }
+    }
+    if let Some(t_values) = times {
+        for t in drifting {
+            if t.width() == 1 && !matches!(t.family, Family::Drift { .. }) {
+                out.extend(drift_candidates(t, t_values));
+            }
+        }
+    }
+    out
+}
+
+/// One cause with a hyper-parameter scanned over a grid (a period, a time constant); the best
+/// grid value is refined by golden-section search between its neighbours.
+pub struct Scan {
+    /// Values of the hyper-parameter, increasing.
+    pub grid: Vec<f64>,
+    /// Refine the best grid value (off for values that must stay on the grid, e.g. harmonics).
+    pub refine_grid: bool,
+    /// The term for one value.
+    #[allow(clippy::type_complexity)]
+    pub make: Box<dyn Fn(f64) -> Term + Send + Sync>,
+}
+
+impl Candidate for Scan {
+    fn variants(&self, _obs: &Observations) -> Vec<Term> {
+        self.grid.iter().map(|&p| (self.make)(p)).collect()
+    }
+
+    fn refine(&self, best: usize, score: &dyn Fn(&Term) -> f64) -> Option<Term> {
+        if !self.refine_grid || self.grid.len() < 3 {
+            return None;
+        }
+        let lo = self.grid[best.saturating_sub(1)];
+        let hi = self.grid[(best + 1).min(self.grid.len() - 1)];
+        let f = |p: f64| score(&(self.make)(p));
+        let golden = 0.5 * (5f64.sqrt() - 1.0);
+        let (mut a, mut b) = (lo, hi);
+        let mut c = b - golden * (b - a);
+        let mut d = a + golden * (b - a);
+        let (mut fc, mut fd) = (f(c), f(d));
+        for _ in 0..40 {
+            if fc < fd {
+                b = d;
+                d = c;
+                fd = fc;
+                c = b - golden * (b - a);
+                fc = f(c);
+            } else {
+                a = c;
+                c = d;
+                fc = fd;
+                d = a + golden * (b - a);
+                fd = f(d);
+            }
+        }
+        let p = 0.5 * (a + b);
+        (f(p) < f(self.grid[best])).then(|| (self.make)(p))
+    }
+}
+
+/// A set of alternative terms for one cause.
+pub struct Alternatives(pub Vec<Term>);
+
+impl Candidate for Alternatives {
+    fn variants(&self, _obs: &Observations) -> Vec<Term> {
+        self.0.clone()
+    }
+}
+
+fn drift_candidates(constant: &Term, t: &[f64]) -> Vec<Box<dyn Candidate>> {
+    let t0 = t.iter().copied().fold(f64::INFINITY, f64::min);
+    let q = constant.coefficients[0].1;
+    let rate = match q {
+        Quantity::Angle => Quantity::AngleRate,
+        _ => Quantity::LengthRate,
+    };
+    let col = constant.columns.column(0);
+    let linear = Term {
+        name: format!("{} drift", constant.name),
+        label: format!("thermal drift of {} (linear in time)", constant.name),
+        meaning: format!(
+            "{} changes steadily during the measurement: the machine warms up",
+            constant.label
+        ),
+        family: Family::Drift {
+            time_constant_s: None,
+        },
+        columns: DMat::from_fn(t.len(), 1, |i, _| col[i] * (t[i] - t0)),
+        coefficients: vec![(format!("{} rate", constant.name), rate)],
+        summary: Summary::EachCoefficient,
+        exposed_by: Some("t".into()),
+        separated_by: None,
+    };
+    let (name, label) = (constant.name.clone(), constant.label.clone());
+    let column: Vec<f64> = col.iter().copied().collect();
+    let times = t.to_vec();
+    let make = move |tau: f64| Term {
+        name: format!("{name} drift exp"),
+        label: format!("thermal drift of {name} (first-order, τ = {tau:.0} s)"),
+        meaning: format!("{label} settles towards a new value with a thermal time constant"),
+        family: Family::Drift {
+            time_constant_s: Some(tau),
+        },
+        columns: DMat::from_fn(times.len(), 1, |i, _| {
+            column[i] * (1.0 - (-(times[i] - t0) / tau).exp())
+        }),
+        coefficients: vec![(format!("{name} change"), q)],
+        summary: Summary::EachCoefficient,
+        exposed_by: Some("t".into()),
+        separated_by: None,
+    };
+    let exponential = Scan {
+        grid: time_constants_to_scan(t),
+        refine_grid: true,
+        make: Box::new(make),
+    };
+    vec![Box::new(linear), Box::new(exponential)]
+}
+
+fn coefficient_name(name: &str, suffix: &str, k: usize, width: usize) -> String {
+    if width == 1 {
+        format!("{name}{suffix}")
+    } else {
+        format!("{name}{suffix}[{k}]")
+    }
+}
+
+fn column_matrix(c: &DVec) -> DMat {
+    DMat::from_column_slice(c.len(), 1, c.as_slice())
+}
+
+fn varies(v: &[f64]) -> bool {
+    let (lo, hi) = crate::basis::range(v);
+    hi > lo
+}
+
+fn format_period(p: f64, rotary: bool) -> String {
+    if rotary {
+        format!("{:.1}°", p.to_degrees())
+    } else {
+        format!("{p:.2} mm")
+    }
+}

@@ -1,0 +1,366 @@
+//! Measured datasets on disk: a JSON manifest plus a CSV observation table (format in
+//! `docs/formats.md`), turned into [`Observations`], a base model and the candidate library.
+
+use std::path::{Path, PathBuf};
+
+use mte_linalg::{DMat, DVec};
+use serde::Deserialize;
+
+use crate::candidate::{Candidate, SlotEffect, SlotRole, physical_effects};
+use crate::data::{Observations, Variable, VariableKind};
+use crate::term::{Family, Quantity, Term};
+use crate::{DiagnoseError, Result};
+
+/// The manifest of a dataset (`"format": "mte-dataset/1"`).
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Manifest {
+    /// Format tag, `mte-dataset/1`.
+    pub format: String,
+    /// `axis`, `rtest` or `tracker`.
+    pub kind: String,
+    /// Free text.
+    #[serde(default)]
+    pub description: Option<String>,
+    /// The observation table, relative to the manifest.
+    pub data: String,
+    /// Stated standard uncertainty of one observation, µm.
+    #[serde(default)]
+    pub noise_um: Option<f64>,
+    /// Axis data: the axis measured (`X`).
+    #[serde(default)]
+    pub axis: Option<String>,
+    /// Library name or file of the machine (R-test and tracker data).
+    #[serde(default)]
+    pub machine: Option<String>,
+    /// Setups (ball positions or tracker stations).
+    #[serde(default)]
+    pub setups: Vec<SetupSpec>,
+    /// Base model: names of the parameters the user believes in (defaults per kind).
+    #[serde(default)]
+    pub base_model: Option<Vec<String>>,
+}
+
+/// One setup of a dataset.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SetupSpec {
+    /// Identifier used in the CSV `setup` column.
+    pub id: String,
+    /// R-test: ball centre in table (workpiece) coordinates, mm.
+    #[serde(default)]
+    pub ball_mm: Option<[f64; 3]>,
+    /// Tracker: station position in machine coordinates, mm (nominal).
+    #[serde(default)]
+    pub station_mm: Option<[f64; 3]>,
+}
+
+/// A dataset ready to diagnose.
+pub struct Prepared {
+    /// The observations.
+    pub observations: Observations,
+    /// The base model.
+    pub base: Vec<Term>,
+    /// The candidate library.
+    pub candidates: Vec<Box<dyn Candidate>>,
+    /// A title for reports.
+    pub title: String,
+}
+
+/// A parsed CSV table with line numbers for error messages.
+pub(crate) struct Table {
+    path: String,
+    header: Vec<String>,
+    rows: Vec<(usize, Vec<String>)>,
+}
+
+impl Table {
+    pub(crate) fn read(path: &Path) -> Result<Table> {
+        let text = std::fs::read_to_string(path).map_err(|e| DiagnoseError::Dataset {
+            path: path.display().to_string(),
+            detail: e.to_string(),
+        })?;
+        Table::parse(&text, &path.display().to_string())
+    }
+
+    pub(crate) fn parse(text: &str, path: &str) -> Result<Table> {
+        let mut lines = text
+            .lines()
+            .enumerate()
+            .filter(|(_, l)| !l.trim().is_empty() && !l.trim_start().starts_with('#'));
+        let Some((_, head)) = lines.next() else {
+            return Err(DiagnoseError::Dataset {
+                path: path.into(),
+                detail: "empty file: expected a header line".into(),
+            });
+        };
+        let header: Vec<String> = head.split(',').map(|h| h.trim().to_string()).collect();
+        let mut rows = Vec::new();
+        for (i, line) in lines {
+            let cells: Vec<String> = line.split(',').map(|c| c.trim().to_string()).collect();
+            if cells.len() != header.len() {
+                return Err(DiagnoseError::Dataset {
+                    path: path.into(),
+                    detail: format!(
+                        "line {}: {} fields, the header has {}",
+                        i + 1,
+                        cells.len(),
+                        header.len()
+                    ),
+                });
+            }
+            rows.push((i + 1, cells));
+        }
+        Ok(Table {
+            path: path.into(),
+            header,
+            rows,
+        })
+    }
+
+    pub(crate) fn len(&self) -> usize {
+        self.rows.len()
+    }
+
+    pub(crate) fn column(&self, name: &str) -> Option<usize> {
+        self.header.iter().position(|h| h == name)
+    }
+
+    pub(crate) fn require(&self, name: &str) -> Result<usize> {
+        self.column(name).ok_or_else(|| DiagnoseError::Dataset {
+            path: self.path.clone(),
+            detail: format!(
+                "missing column `{name}` (header: {})",
+                self.header.join(", ")
+            ),
+        })
+    }
+
+    pub(crate) fn text(&self, row: usize, col: usize) -> &str {
+        &self.rows[row].1[col]
+    }
+
+    pub(crate) fn number(&self, row: usize, col: usize) -> Result<f64> {
+        let (line, cells) = &self.rows[row];
+        let v: f64 = cells[col].parse().map_err(|_| DiagnoseError::Dataset {
+            path: self.path.clone(),
+            detail: format!(
+                "line {line}, column `{}`: `{}` is not a number",
+                self.header[col], cells[col]
+            ),
+        })?;
+        if !v.is_finite() {
+            return Err(DiagnoseError::Dataset {
+                path: self.path.clone(),
+                detail: format!(
+                    "line {line}, column `{}`: {v} is not finite",
+                    self.header[col]
+                ),
+            });
+        }
+        Ok(v)
+    }
+
+    pub(crate) fn numbers(&self, col: usize) -> Result<Vec<f64>> {
+        (0..self.len()).map(|r| self.number(r, col)).collect()
+    }
+
+    pub(crate) fn error(&self, row: usize, detail: String) -> DiagnoseError {
+        DiagnoseError::Dataset {
+            path: self.path.clone(),
+            detail: format!("line {}: {detail}", self.rows[row].0),
+        }
+    }
+
+    pub(crate) fn path(&self) -> &str {
+        &self.path
+    }
+}
+
+/// Reads a manifest and its table and prepares the diagnosis.
+///
+/// # Errors
+/// [`DiagnoseError::Dataset`] naming the file, line and field for unreadable or malformed input.
+pub fn load(manifest_path: &Path) -> Result<Prepared> {
+    let text = std::fs::read_to_string(manifest_path).map_err(|e| DiagnoseError::Dataset {
+        path: manifest_path.display().to_string(),
+        detail: e.to_string(),
+    })?;
+    let manifest: Manifest = serde_json::from_str(&text).map_err(|e| DiagnoseError::Dataset {
+        path: manifest_path.display().to_string(),
+        detail: e.to_string(),
+    })?;
+    if manifest.format != "mte-dataset/1" {
+        return Err(DiagnoseError::Dataset {
+            path: manifest_path.display().to_string(),
+            detail: format!(
+                "field `format`: `{}`, expected `mte-dataset/1`",
+                manifest.format
+            ),
+        });
+    }
+    if let Some(n) = manifest.noise_um {
+        if !(n.is_finite() && n > 0.0) {
+            return Err(DiagnoseError::Dataset {
+                path: manifest_path.display().to_string(),
+                detail: format!("field `noise_um`: {n} is not a positive length"),
+            });
+        }
+    }
+    let dir = manifest_path
+        .parent()
+        .map(Path::to_path_buf)
+        .unwrap_or_else(|| PathBuf::from("."));
+    let table = Table::read(&dir.join(&manifest.data))?;
+    match manifest.kind.as_str() {
+        "axis" => prepare_axis(&manifest, &table, manifest_path),
+        other => {
+            crate::adapters::prepare_machine_dataset(other, &manifest, &table, &dir, manifest_path)
+        }
+    }
+}
+
+/// Bidirectional positioning runs of one axis (laser interferometer, ISO 230-2 style).
+/// Columns: `run`, `direction` (+1/−1), `<axis>_mm` (or `<axis>_deg` for a rotary axis),
+/// optional `t_s`, and `deviation_um` (measured minus commanded position).
+fn prepare_axis(manifest: &Manifest, table: &Table, manifest_path: &Path) -> Result<Prepared> {
+    let axis = manifest
+        .axis
+        .clone()
+        .ok_or_else(|| DiagnoseError::Dataset {
+            path: manifest_path.display().to_string(),
+            detail: "field `axis`: missing (the name of the axis measured, e.g. \"X\")".into(),
+        })?;
+    let lower = axis.to_lowercase();
+    let (pos_col, rotary) = match (table.column(&format!("{lower}_mm")), table.column(&format!("{lower}_deg"))) {
+        (Some(c), _) => (c, false),
+        (None, Some(c)) => (c, true),
+        (None, None) => return Err(table.error(0, format!("missing column `{lower}_mm` (or `{lower}_deg`) with the commanded position of {axis}"))),
+    };
+    let n = table.len();
+    if n == 0 {
+        return Err(DiagnoseError::Dataset {
+            path: table.path().into(),
+            detail: "no observations".into(),
+        });
+    }
+    let mut position = table.numbers(pos_col)?;
+    if rotary {
+        position.iter_mut().for_each(|p| *p = p.to_radians());
+    }
+    let deviation = table.numbers(table.require("deviation_um")?)?;
+    let dir_col = table.require("direction")?;
+    let mut direction = Vec::with_capacity(n);
+    for r in 0..n {
+        direction.push(match table.text(r, dir_col) {
+            "+" | "+1" | "1" => 1.0,
+            "-" | "-1" => -1.0,
+            other => {
+                return Err(
+                    table.error(r, format!("column `direction`: `{other}`, expected + or -"))
+                );
+            }
+        });
+    }
+    let run_col = table.require("run")?;
+    let mut setup_names: Vec<String> = Vec::new();
+    let mut setup = Vec::with_capacity(n);
+    for r in 0..n {
+        let id = table.text(r, run_col).to_string();
+        let k = setup_names
+            .iter()
+            .position(|s| *s == id)
+            .unwrap_or_else(|| {
+                setup_names.push(id.clone());
+                setup_names.len() - 1
+            });
+        setup.push(k);
+    }
+    let mut variables = vec![
+        Variable {
+            name: axis.clone(),
+            kind: if rotary {
+                VariableKind::RotaryAxis
+            } else {
+                VariableKind::LinearAxis
+            },
+            values: position.clone(),
+        },
+        Variable {
+            name: "direction".into(),
+            kind: VariableKind::Direction,
+            values: direction,
+        },
+    ];
+    if let Some(c) = table.column("t_s") {
+        variables.push(Variable {
+            name: "t".into(),
+            kind: VariableKind::Time,
+            values: table.numbers(c)?,
+        });
+    }
+    let observations = Observations {
+        values: DVec::from_iterator(n, deviation.iter().map(|d| d * 1e-3)),
+        sigma: manifest.noise_um.map(|s| DVec::from_element(n, s * 1e-3)),
+        variables,
+        setup,
+        setup_names,
+        channel: vec![0; n],
+        channel_names: vec!["deviation".into()],
+        setup_kind: "run".into(),
+    };
+    observations.validate()?;
+    let quantity = if rotary {
+        Quantity::Angle
+    } else {
+        Quantity::Length
+    };
+    let iso = format!("E{axis}{axis}");
+    let offset = Term::single(
+        format!("{iso} offset"),
+        format!("zero offset of the {axis} measurement"),
+        "constant offset between the instrument's zero and the axis' zero",
+        Family::Base,
+        DVec::from_element(n, 1.0),
+        quantity,
+    );
+    let slot = SlotEffect {
+        name: iso.clone(),
+        label: format!("positioning error of {axis}"),
+        meaning: format!("deviation of {axis} from its commanded position along its own direction"),
+        quantity,
+        role: SlotRole::Component {
+            axis: axis.clone(),
+            positioning: true,
+            straightness: false,
+        },
+        column: DVec::from_element(n, 1.0),
+        separated_by: None,
+    };
+    let mut candidates = physical_effects(&observations, std::slice::from_ref(&slot), &[&offset]);
+    if let Some(t) = observations.variable_of_kind(VariableKind::Time) {
+        let t0 = t.values.iter().copied().fold(f64::INFINITY, f64::min);
+        let col = DMat::from_fn(n, 1, |i, _| position[i] * (t.values[i] - t0));
+        candidates.push(Box::new(Term {
+            name: format!("{iso} scale drift"),
+            label: format!("thermal expansion of {axis} growing in time"),
+            meaning: format!("the scale of {axis} changes while the machine warms up (thermal expansion of the screw or scale)"),
+            family: Family::Drift { time_constant_s: None },
+            coefficients: vec![(format!("{iso} scale rate"), Quantity::RatioRate)],
+            columns: col,
+            summary: crate::term::Summary::EachCoefficient,
+            exposed_by: Some("t".into()),
+            separated_by: None,
+        }));
+    }
+    let title = manifest
+        .description
+        .clone()
+        .unwrap_or_else(|| format!("{axis}-axis positioning runs"));
+    Ok(Prepared {
+        observations,
+        base: vec![offset],
+        candidates,
+        title,
+    })
+}

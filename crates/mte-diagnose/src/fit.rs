@@ -1,0 +1,268 @@
+//! Weighted least squares over blocks of terms, blocked cross-validation, and the projection
+//! that scores a candidate against the current model.
+
+use mte_linalg::{DMat, DVec};
+
+use crate::data::Observations;
+use crate::term::Term;
+
+/// Relative singular-value threshold below which a direction of the (column-normalised,
+/// whitened) design counts as undetermined.
+pub(crate) const RANK_TOLERANCE: f64 = 1e-9;
+
+/// A candidate whose columns keep less than this fraction of their norm after projecting out the
+/// current model is "not separable with this data" (|cos| of the angle above 0.9999).
+pub(crate) const SEPARABILITY_TOLERANCE: f64 = 1e-2;
+
+/// Whitening factors 1/σ (all 1 when the data state no σ).
+pub(crate) fn whitening(obs: &Observations) -> DVec {
+    match &obs.sigma {
+        Some(s) => s.map(|s| 1.0 / s),
+        None => DVec::from_element(obs.len(), 1.0),
+    }
+}
+
+/// Columns of several terms side by side.
+pub(crate) fn design(terms: &[&Term], n: usize) -> DMat {
+    let p: usize = terms.iter().map(|t| t.width()).sum();
+    let mut x = DMat::zeros(n, p);
+    let mut c = 0;
+    for t in terms {
+        x.columns_mut(c, t.width()).copy_from(&t.columns);
+        c += t.width();
+    }
+    x
+}
+
+/// A weighted least-squares solution.
+#[derive(Debug, Clone)]
+pub(crate) struct Solution {
+    pub coef: DVec,
+    /// `(XᵀWX)⁺`, the cofactor matrix of the coefficients.
+    pub cofactor: DMat,
+    pub rank: usize,
+    /// Unweighted residuals `y − X b`, one per row of the fit.
+    pub residuals: DVec,
+    /// Weighted residual sum of squares.
+    pub rss_w: f64,
+}
+
+/// Solves `min ‖diag(w)(y − X b)‖` by QR of the column-normalised whitened design and an SVD of
+/// its small triangular factor (the SVD gives the rank; undetermined directions get the
+/// minimum-norm solution).
+pub(crate) fn solve(x: &DMat, y: &DVec, w: &DVec) -> Solution {
+    let (n, p) = x.shape();
+    if p == 0 {
+        let rss_w = y.iter().zip(w.iter()).map(|(r, w)| (r * w).powi(2)).sum();
+        return Solution {
+            coef: DVec::zeros(0),
+            cofactor: DMat::zeros(0, 0),
+            rank: 0,
+            residuals: y.clone(),
+            rss_w,
+        };
+    }
+    let mut xw = x.clone();
+    for (i, wi) in w.iter().enumerate() {
+        xw.row_mut(i).scale_mut(*wi);
+    }
+    let scale: DVec = DVec::from_iterator(
+        p,
+        xw.column_iter().map(|c| {
+            let n = c.norm();
+            if n > 0.0 { 1.0 / n } else { 1.0 }
+        }),
+    );
+    for (j, s) in scale.iter().enumerate() {
+        xw.column_mut(j).scale_mut(*s);
+    }
+    let yw = y.component_mul(w);
+    let (r, qty) = if n >= p {
+        let qr = xw.qr();
+        let qty = qr.q().transpose() * &yw;
+        (qr.r(), qty)
+    } else {
+        (xw.clone(), yw.clone())
+    };
+    let svd = r.svd(true, true);
+    let (u, vt) = (svd.u.expect("requested"), svd.v_t.expect("requested"));
+    let smax = svd.singular_values.max();
+    let mut coef_s = DVec::zeros(p);
+    let mut cof_s = DMat::zeros(p, p);
+    let mut rank = 0;
+    for k in 0..svd.singular_values.len() {
+        let s = svd.singular_values[k];
+        if s > RANK_TOLERANCE * smax && s > 0.0 {
+            rank += 1;
+            let v = vt.row(k).transpose();
+            coef_s += &v * (u.column(k).dot(&qty) / s);
+            cof_s += &v * v.transpose() / (s * s);
+        }
+    }
+    let coef = coef_s.component_mul(&scale);
+    let cofactor = DMat::from_fn(p, p, |i, j| cof_s[(i, j)] * scale[i] * scale[j]);
+    let residuals = y - x * &coef;
+    let rss_w = residuals
+        .iter()
+        .zip(w.iter())
+        .map(|(r, w)| (r * w).powi(2))
+        .sum();
+    Solution {
+        coef,
+        cofactor,
+        rank,
+        residuals,
+        rss_w,
+    }
+}
+
+/// Rows of `m` selected by `rows`.
+pub(crate) fn select_rows(m: &DMat, rows: &[usize]) -> DMat {
+    DMat::from_fn(rows.len(), m.ncols(), |i, j| m[(rows[i], j)])
+}
+
+fn select(v: &DVec, rows: &[usize]) -> DVec {
+    DVec::from_iterator(rows.len(), rows.iter().map(|&i| v[i]))
+}
+
+/// Blocked K-fold cross-validation: the acquisition order is cut into contiguous blocks and
+/// every K-th block is held out together, so a fold never sees the neighbours of its test
+/// points on either side of a block boundary within the block. Returns the out-of-fold
+/// prediction residuals (mm), one per observation.
+#[derive(Debug, Clone)]
+pub(crate) struct Folds {
+    pub test: Vec<Vec<usize>>,
+    pub train: Vec<Vec<usize>>,
+}
+
+impl Folds {
+    /// `k` folds of blocks of about `n / (k · blocks_per_fold)` observations.
+    pub fn blocked(obs: &Observations, k: usize, blocks_per_fold: usize) -> Folds {
+        let order = obs.acquisition_order();
+        let n = order.len();
+        let n_blocks = (k * blocks_per_fold).min(n).max(k);
+        let mut test = vec![Vec::new(); k];
+        for (pos, &i) in order.iter().enumerate() {
+            let block = pos * n_blocks / n;
+            test[block % k].push(i);
+        }
+        let train = test
+            .iter()
+            .map(|t| {
+                let mut held = vec![false; n];
+                t.iter().for_each(|&i| held[i] = true);
+                (0..n).filter(|&i| !held[i]).collect()
+            })
+            .collect();
+        Folds { test, train }
+    }
+
+    /// Out-of-fold residuals of the model with design `x`.
+    pub fn residuals(&self, x: &DMat, y: &DVec, w: &DVec) -> DVec {
+        let mut out = DVec::zeros(y.len());
+        for (train, test) in self.train.iter().zip(&self.test) {
+            let sol = solve(&select_rows(x, train), &select(y, train), &select(w, train));
+            for &i in test {
+                out[i] = y[i] - x.row(i).dot(&sol.coef.transpose());
+            }
+        }
+        out
+    }
+}
+
+/// Root mean square of a vector.
+pub(crate) fn rms(v: &DVec) -> f64 {
+    if v.is_empty() {
+        0.0
+    } else {
+        (v.norm_squared() / v.len() as f64).sqrt()
+    }
+}
+
+/// Largest absolute entry.
+pub(crate) fn max_abs(v: &DVec) -> f64 {
+    v.iter().fold(0.0_f64, |m, x| m.max(x.abs()))
+}
+
+/// An orthonormal basis of the whitened current model, to project candidates against.
+pub(crate) struct Projector {
+    q: DMat,
+    w: DVec,
+}
+
+/// What a candidate adds beyond the current model.
+#[derive(Debug, Clone)]
+pub(crate) struct Increment {
+    /// Reduction of the weighted RSS if the candidate were added.
+    pub delta_rss: f64,
+    /// Number of new independent directions the candidate brings.
+    pub new_rank: usize,
+    /// Smallest fraction of a (normalised) candidate direction left after projecting out the
+    /// current model: near 0 means the candidate is a combination of existing terms.
+    pub separability: f64,
+}
+
+impl Projector {
+    pub fn new(x: &DMat, w: &DVec) -> Projector {
+        let mut xw = x.clone();
+        for (i, wi) in w.iter().enumerate() {
+            xw.row_mut(i).scale_mut(*wi);
+        }
+        let q = orthonormal_basis(&xw);
+        Projector { q, w: w.clone() }
+    }
+
+    /// Whitened `c` with the current model projected out.
+    pub fn residual_part(&self, c: &DMat) -> DMat {
+        let mut cw = c.clone();
+        for (i, wi) in self.w.iter().enumerate() {
+            cw.row_mut(i).scale_mut(*wi);
+        }
+        if self.q.ncols() > 0 {
+            let coef = self.q.transpose() * &cw;
+            cw -= &self.q * coef;
+        }
+        cw
+    }
+
+    /// How much the candidate `c` would reduce the weighted RSS of residuals `r`.
+    pub fn increment(&self, c: &DMat, r: &DVec) -> Increment {
+        let mut cw = c.clone();
+        for (i, wi) in self.w.iter().enumerate() {
+            cw.row_mut(i).scale_mut(*wi);
+        }
+        let norms: Vec<f64> = cw.column_iter().map(|c| c.norm()).collect();
+        let perp = self.residual_part(c);
+        // Normalise by the candidate's own column norms so the test is scale free.
+        let mut perp_n = perp.clone();
+        for (j, n) in norms.iter().enumerate() {
+            if *n > 0.0 {
+                perp_n.column_mut(j).scale_mut(1.0 / n);
+            }
+        }
+        let sv = perp_n.clone().svd(false, false).singular_values;
+        let separability = if sv.is_empty() { 0.0 } else { sv.min() };
+        let basis = orthonormal_basis(&perp);
+        let rw = r.component_mul(&self.w);
+        let proj = basis.transpose() * rw;
+        Increment {
+            delta_rss: proj.norm_squared(),
+            new_rank: basis.ncols(),
+            separability,
+        }
+    }
+}
+
+/// Orthonormal basis of the column space of `a` (thin SVD, relative tolerance).
+pub(crate) fn orthonormal_basis(a: &DMat) -> DMat {
+    if a.ncols() == 0 {
+        return DMat::zeros(a.nrows(), 0);
+    }
+    let svd = a.clone().svd(true, false);
+    let smax = svd.singular_values.max();
+    let u = svd.u.expect("requested");
+    let keep: Vec<usize> = (0..svd.singular_values.len())
+        .filter(|&k| svd.singular_values[k] > 1e-9 * smax && smax > 0.0)
+        .collect();
+    DMat::from_fn(a.nrows(), keep.len(), |i, j| u[(i, keep[j])])
+}

@@ -1,0 +1,155 @@
+//! Structure tests of residuals: does what the model leaves over still depend on an axis
+//! position, on time, on the direction of motion, periodically on position, or on the setup?
+
+use mte_linalg::{DMat, DVec, stats};
+use serde::Serialize;
+
+use crate::basis::{legendre_columns, periods_to_scan, sin_cos_columns};
+use crate::data::{Observations, VariableKind};
+use crate::fit::Projector;
+
+/// One test of the residuals.
+#[derive(Debug, Clone, Serialize)]
+pub struct StructureTest {
+    /// What the residuals were tested against: `X`, `t`, `direction`, `setup`.
+    pub variable: String,
+    /// Which channel (`dx`, `length` …).
+    pub channel: String,
+    /// The kind of dependence tested: "trend (cubic)", "periodic", "direction", "setup".
+    pub test: String,
+    /// F statistic of the dependence beyond the current model.
+    pub f_statistic: f64,
+    /// p-value, Bonferroni-adjusted for every test run on this dataset (and for the period scan).
+    pub p_value: f64,
+    /// Share of the residual sum of squares the dependence explains.
+    pub share_of_residual: f64,
+    /// For a periodic dependence, the best period (mm or rad).
+    pub period: Option<f64>,
+}
+
+impl StructureTest {
+    /// Significant at the workspace's discovery level.
+    pub fn is_significant(&self, alpha: f64) -> bool {
+        self.p_value < alpha
+    }
+}
+
+/// Runs every structure test on the residuals `r` of the model whose design is `x`.
+pub(crate) fn structure_tests(
+    obs: &Observations,
+    x: &DMat,
+    r: &DVec,
+    w: &DVec,
+    rss_w: f64,
+    dof: usize,
+) -> Vec<StructureTest> {
+    let projector = Projector::new(x, w);
+    let n = obs.len();
+    let mut raw: Vec<(StructureTest, f64)> = Vec::new(); // (test, number of hypotheses inside it)
+    let channels: Vec<usize> = (0..obs.channel_names.len()).collect();
+    let mut run = |variable: &str,
+                   channel: usize,
+                   test: &str,
+                   cols: DMat,
+                   period: Option<f64>,
+                   inner: f64| {
+        let mask = DVec::from_fn(n, |i, _| if obs.channel[i] == channel { 1.0 } else { 0.0 });
+        let mut c = cols;
+        for (i, m) in mask.iter().enumerate() {
+            c.row_mut(i).scale_mut(*m);
+        }
+        let inc = projector.increment(&c, r);
+        if inc.new_rank == 0 || dof <= inc.new_rank {
+            return None;
+        }
+        let rss_new = (rss_w - inc.delta_rss).max(1e-300);
+        let d2 = (dof - inc.new_rank) as f64;
+        let f = (inc.delta_rss / inc.new_rank as f64) / (rss_new / d2);
+        let p = stats::f_sf(f, inc.new_rank as f64, d2);
+        raw.push((
+            StructureTest {
+                variable: variable.to_string(),
+                channel: obs.channel_names[channel].clone(),
+                test: test.to_string(),
+                f_statistic: f,
+                p_value: p,
+                share_of_residual: inc.delta_rss / rss_w.max(1e-300),
+                period,
+            },
+            inner,
+        ));
+        Some(())
+    };
+    for &ch in &channels {
+        for v in &obs.variables {
+            match v.kind {
+                VariableKind::LinearAxis | VariableKind::RotaryAxis | VariableKind::Time => {
+                    run(
+                        &v.name,
+                        ch,
+                        "trend (cubic)",
+                        legendre_columns(&v.values, 1..=3),
+                        None,
+                        1.0,
+                    );
+                    if v.kind != VariableKind::Time {
+                        let periods =
+                            periods_to_scan(&v.values, v.kind == VariableKind::RotaryAxis);
+                        let mut best: Option<(f64, f64)> = None;
+                        for &p in &periods {
+                            let inc = {
+                                let mut c = sin_cos_columns(&v.values, p);
+                                for i in 0..n {
+                                    if obs.channel[i] != ch {
+                                        c.row_mut(i).fill(0.0);
+                                    }
+                                }
+                                projector.increment(&c, r).delta_rss
+                            };
+                            if best.is_none_or(|(_, d)| inc > d) {
+                                best = Some((p, inc));
+                            }
+                        }
+                        if let Some((p, _)) = best {
+                            run(
+                                &v.name,
+                                ch,
+                                "periodic",
+                                sin_cos_columns(&v.values, p),
+                                Some(p),
+                                periods.len() as f64,
+                            );
+                        }
+                    }
+                }
+                VariableKind::Direction => {
+                    run(
+                        &v.name,
+                        ch,
+                        "direction",
+                        DMat::from_column_slice(n, 1, &v.values),
+                        None,
+                        1.0,
+                    );
+                }
+            }
+        }
+        if obs.setup_names.len() > 1 {
+            let k = obs.setup_names.len();
+            let cols = DMat::from_fn(
+                n,
+                k - 1,
+                |i, j| if obs.setup[i] == j + 1 { 1.0 } else { 0.0 },
+            );
+            run("setup", ch, "setup", cols, None, 1.0);
+        }
+    }
+    let total: f64 = raw.iter().map(|(_, inner)| inner).sum();
+    raw.into_iter()
+        .map(|(mut t, inner)| {
+            // Bonferroni over every hypothesis examined, the period scan counted in full.
+            t.p_value = (t.p_value * total.max(inner)).min(1.0);
+            t
+        })
+        .collect()
+}

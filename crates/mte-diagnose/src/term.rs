@@ -1,0 +1,233 @@
+//! Model terms: named blocks of design columns with the physics that gives them their name.
+
+use mte_linalg::{DMat, DVec};
+use serde::Serialize;
+
+/// The physical family of an effect, as engineers group them.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+#[non_exhaustive]
+pub enum Family {
+    /// Part of the base model the user believes in.
+    Base,
+    /// Position or orientation of a rotary axis line (ISO 230-1 location error, e.g. EX0C).
+    Location,
+    /// Squareness between two axes (EC0Y, EB0Y …).
+    Squareness,
+    /// A component error of an axis as a polynomial in its coordinate (straightness,
+    /// positioning, angular error).
+    Component {
+        /// Polynomial degree.
+        degree: usize,
+    },
+    /// Scale (linear positioning) error of an axis.
+    Scale,
+    /// Periodic error along an axis, e.g. ball-screw pitch error.
+    Periodic {
+        /// Period found in the data, mm (or rad for a rotary axis).
+        period: f64,
+    },
+    /// Reversal (backlash) error: depends on the direction of approach.
+    Reversal,
+    /// Thermal drift of a parameter in time.
+    Drift {
+        /// `None` for a linear drift, `Some(τ)` for a first-order exponential with time constant τ (s).
+        time_constant_s: Option<f64>,
+    },
+    /// Setup error: ball position, sensor nest offset, tool length.
+    Setup,
+    /// Error of the instrument itself, e.g. the scale of a laser tracker's lengths.
+    Instrument,
+    /// Supplied by a user's [`crate::Candidate`].
+    Custom,
+}
+
+/// How a coefficient is read by people: the unit of the report.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[non_exhaustive]
+pub enum Quantity {
+    /// A length in mm, reported in µm.
+    Length,
+    /// An angle in rad, reported in µrad and arcsec.
+    Angle,
+    /// A length rate in mm/s, reported in µm/min.
+    LengthRate,
+    /// An angle rate in rad/s, reported in µrad/min.
+    AngleRate,
+    /// A dimensionless ratio, reported in ppm (µm/m).
+    Ratio,
+    /// A ratio changing in time, 1/s, reported in ppm/min.
+    RatioRate,
+}
+
+impl Quantity {
+    /// Factor from the internal unit to the reported one and the reported unit's symbol.
+    pub fn report_unit(self) -> (f64, &'static str) {
+        match self {
+            Quantity::Length => (1e3, "µm"),
+            Quantity::Angle => (1e6, "µrad"),
+            Quantity::LengthRate => (1e3 * 60.0, "µm/min"),
+            Quantity::AngleRate => (1e6 * 60.0, "µrad/min"),
+            Quantity::Ratio => (1e6, "ppm"),
+            Quantity::RatioRate => (1e6 * 60.0, "ppm/min"),
+        }
+    }
+
+    /// The value in the reported unit, with arcsec alongside for angles.
+    pub fn format(self, value: f64, u: f64) -> String {
+        let (f, unit) = self.report_unit();
+        let digits = significant_decimals(u * f);
+        let main = format!("{:.*} ± {:.*} {unit}", digits, value * f, digits, u * f);
+        if self == Quantity::Angle {
+            let arcsec = value.to_degrees() * 3600.0;
+            let u_arcsec = u.to_degrees() * 3600.0;
+            let d = significant_decimals(u_arcsec);
+            format!("{main} ({:.*} ± {:.*}″)", d, arcsec, d, u_arcsec)
+        } else {
+            main
+        }
+    }
+}
+
+/// Decimals that show an uncertainty with two significant digits.
+pub(crate) fn significant_decimals(u: f64) -> usize {
+    if !(u.is_finite() && u > 0.0) {
+        return 2;
+    }
+    (1.0 - u.log10().floor()).clamp(0.0, 6.0) as usize
+}
+
+/// How the coefficients of a term are summarised for the report.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+#[non_exhaustive]
+pub enum Summary {
+    /// Each coefficient is a physical quantity of its own.
+    EachCoefficient,
+    /// Two coefficients (a·sin + b·cos) summarised as an amplitude √(a² + b²).
+    Amplitude,
+}
+
+/// A named block of design columns: the first-order effect of one physical cause on every
+/// observation, one column per coefficient.
+#[derive(Debug, Clone)]
+pub struct Term {
+    /// Short name, the ISO 230-1 name where there is one (`EB0Y`, `EXX periodic`).
+    pub name: String,
+    /// What an engineer calls it ("squareness of B axis to Y").
+    pub label: String,
+    /// One sentence of physical meaning.
+    pub meaning: String,
+    /// The family of effect.
+    pub family: Family,
+    /// Design columns, `n × k`: the change of each observation per unit coefficient.
+    pub columns: DMat,
+    /// Name and quantity of each coefficient.
+    pub coefficients: Vec<(String, Quantity)>,
+    /// How the report summarises the coefficients.
+    pub summary: Summary,
+    /// The covariate whose residual plot shows this effect best (`t`, `X`, `direction`).
+    pub exposed_by: Option<String>,
+    /// The measurement that would separate this effect from others it may be confounded with.
+    pub separated_by: Option<String>,
+}
+
+impl Term {
+    /// A term with one coefficient.
+    pub fn single(
+        name: impl Into<String>,
+        label: impl Into<String>,
+        meaning: impl Into<String>,
+        family: Family,
+        column: DVec,
+        quantity: Quantity,
+    ) -> Self {
+        let name = name.into();
+        Term {
+            coefficients: vec![(name.clone(), quantity)],
+            name,
+            label: label.into(),
+            meaning: meaning.into(),
+            family,
+            columns: DMat::from_column_slice(column.len(), 1, column.as_slice()),
+            summary: Summary::EachCoefficient,
+            exposed_by: None,
+            separated_by: None,
+        }
+    }
+
+    /// Number of coefficients.
+    pub fn width(&self) -> usize {
+        self.columns.ncols()
+    }
+
+    /// Sets the covariate that exposes the effect.
+    pub fn exposed_by(mut self, variable: impl Into<String>) -> Self {
+        self.exposed_by = Some(variable.into());
+        self
+    }
+
+    /// Sets the measurement that would separate the effect from what it is confounded with.
+    pub fn separated_by(mut self, hint: impl Into<String>) -> Self {
+        self.separated_by = Some(hint.into());
+        self
+    }
+
+    /// `true` when every column is zero to rounding: the effect does not reach these data.
+    pub fn is_invisible(&self) -> bool {
+        self.columns.iter().all(|v| v.abs() < 1e-15)
+    }
+}
+
+/// An estimated quantity as reported.
+#[derive(Debug, Clone, Serialize)]
+pub struct Estimate {
+    /// Name of the quantity (coefficient name or "amplitude").
+    pub name: String,
+    /// Value in internal units (mm, rad, mm/s, rad/s or ratio).
+    pub value: f64,
+    /// Standard uncertainty, same unit.
+    pub uncertainty: f64,
+    /// What kind of quantity it is.
+    pub quantity: Quantity,
+    /// Value ± uncertainty in the units engineers read.
+    pub text: String,
+}
+
+impl Term {
+    /// Reported estimates from the term's coefficients and their covariance block.
+    pub fn estimates(&self, coef: &[f64], cov: &DMat) -> Vec<Estimate> {
+        let make = |name: &str, value: f64, u: f64, quantity: Quantity| Estimate {
+            name: name.to_string(),
+            value,
+            uncertainty: u,
+            quantity,
+            text: quantity.format(value, u),
+        };
+        match self.summary {
+            Summary::Amplitude if coef.len() == 2 => {
+                let (a, b) = (coef[0], coef[1]);
+                let amp = a.hypot(b);
+                // Delta method: ∂amp/∂(a, b) = (a, b)/amp.
+                let g = if amp > 0.0 {
+                    [a / amp, b / amp]
+                } else {
+                    [std::f64::consts::FRAC_1_SQRT_2; 2]
+                };
+                let var = g[0] * g[0] * cov[(0, 0)]
+                    + 2.0 * g[0] * g[1] * cov[(0, 1)]
+                    + g[1] * g[1] * cov[(1, 1)];
+                vec![make(
+                    "amplitude",
+                    amp,
+                    var.max(0.0).sqrt(),
+                    self.coefficients[0].1,
+                )]
+            }
+            _ => self
+                .coefficients
+                .iter()
+                .enumerate()
+                .map(|(i, (name, q))| make(name, coef[i], cov[(i, i)].max(0.0).sqrt(), *q))
+                .collect(),
+        }
+    }
+}

@@ -1,0 +1,236 @@
+//! Hidden effects in bidirectional axis data (laser interferometer runs, ISO 230-2 style).
+//!
+//! The generator below knows the effects; the diagnosis only reads the files it writes, and the
+//! tests look at the named cause after the diagnosis has run.
+
+use std::path::PathBuf;
+
+use mte_diagnose::{DiagnoseParams, Family, diagnose, load};
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+use rand_distr::{Distribution, Normal};
+
+const NOISE_UM: f64 = 0.3;
+
+/// What the generator hides in the data (µm, mm, s).
+#[derive(Default, Clone, Copy)]
+struct Hidden {
+    reversal_um: f64,
+    pitch_amplitude_um: f64,
+    pitch_period_mm: f64,
+    scale_ppm: f64,
+    zero_drift_um_per_min: f64,
+}
+
+/// Writes 5 bidirectional runs over X ∈ [0, 700] mm at 101 irregularly spaced targets and
+/// returns the manifest path.
+fn write_dataset(name: &str, hidden: Hidden, seed: u64) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("mte-diagnose-axis-{name}-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let noise = Normal::new(0.0, NOISE_UM).unwrap();
+    let targets: Vec<f64> = (0..=100)
+        .map(|i| i as f64 * 7.0 + if i % 2 == 1 { 1.3 } else { 0.0 })
+        .collect();
+    let mut csv = String::from("run,direction,x_mm,t_s,deviation_um\n");
+    let mut t = 0.0;
+    for run in 1..=5 {
+        for dir in [1.0, -1.0] {
+            let order: Vec<f64> = if dir > 0.0 {
+                targets.clone()
+            } else {
+                targets.iter().rev().copied().collect()
+            };
+            for x in order {
+                let dev = 2.0
+                    + hidden.reversal_um * 0.5 * dir
+                    + hidden.pitch_amplitude_um
+                        * (std::f64::consts::TAU * x / hidden.pitch_period_mm.max(1.0) + 0.7).sin()
+                    + hidden.scale_ppm * 1e-3 * x
+                    + hidden.zero_drift_um_per_min * t / 60.0
+                    + noise.sample(&mut rng);
+                csv.push_str(&format!(
+                    "{run},{},{x:.3},{t:.1},{dev:.4}\n",
+                    if dir > 0.0 { "+" } else { "-" }
+                ));
+                t += 4.0;
+            }
+        }
+    }
+    std::fs::write(dir.join("runs.csv"), csv).unwrap();
+    let manifest = format!(
+        r#"{{"format": "mte-dataset/1", "kind": "axis", "axis": "X", "noise_um": {NOISE_UM}, "data": "runs.csv"}}"#
+    );
+    let path = dir.join("manifest.json");
+    std::fs::write(&path, manifest).unwrap();
+    path
+}
+
+fn run(path: &PathBuf) -> mte_diagnose::Diagnosis {
+    let prepared = load(path).expect("dataset loads");
+    diagnose(
+        &prepared.observations,
+        prepared.base,
+        &prepared.candidates,
+        &DiagnoseParams::default(),
+    )
+    .expect("diagnosis runs")
+}
+
+/// Within `k` standard uncertainties.
+fn within(value: f64, u: f64, truth: f64, k: f64) -> bool {
+    (value - truth).abs() <= k * u
+}
+
+#[test]
+fn clean_axis_data_yields_no_discovery() {
+    for seed in 1..=3 {
+        let d = run(&write_dataset(
+            &format!("clean{seed}"),
+            Hidden::default(),
+            seed,
+        ));
+        assert!(
+            d.no_discrepancy(),
+            "seed {seed}: false discovery {:?}",
+            d.findings.iter().map(|f| &f.name).collect::<Vec<_>>()
+        );
+    }
+}
+
+#[test]
+fn hidden_reversal_is_found_and_sized() {
+    let d = run(&write_dataset(
+        "reversal",
+        Hidden {
+            reversal_um: 4.0,
+            ..Hidden::default()
+        },
+        11,
+    ));
+    assert_eq!(
+        d.findings.len(),
+        1,
+        "{:?}",
+        d.findings.iter().map(|f| &f.name).collect::<Vec<_>>()
+    );
+    let f = &d.findings[0];
+    assert_eq!(f.family, Family::Reversal);
+    let e = &f.estimates[0];
+    assert!(
+        within(e.value * 1e3, e.uncertainty * 1e3, 4.0, 2.0),
+        "{}",
+        e.text
+    );
+    // Held-out RMS falls to the noise level (within 10 %).
+    assert!(
+        d.extended.held_out_rms * 1e3 < 1.1 * NOISE_UM,
+        "{}",
+        d.extended.held_out_rms
+    );
+}
+
+#[test]
+fn hidden_pitch_error_and_reversal_are_both_found() {
+    let hidden = Hidden {
+        reversal_um: 3.0,
+        pitch_amplitude_um: 1.5,
+        pitch_period_mm: 25.0,
+        ..Hidden::default()
+    };
+    let d = run(&write_dataset("pitch", hidden, 12));
+    let names: Vec<&str> = d.findings.iter().map(|f| f.name.as_str()).collect();
+    assert_eq!(d.findings.len(), 2, "{names:?}");
+    let periodic = d
+        .findings
+        .iter()
+        .find(|f| matches!(f.family, Family::Periodic { .. }))
+        .expect("periodic found");
+    let Family::Periodic { period } = periodic.family else {
+        unreachable!()
+    };
+    assert!((period - 25.0).abs() < 0.25, "period {period}");
+    let amp = &periodic.estimates[0];
+    assert!(
+        within(amp.value * 1e3, amp.uncertainty * 1e3, 1.5, 2.0)
+            || (amp.value * 1e3 - 1.5).abs() < 0.05,
+        "{}",
+        amp.text
+    );
+    assert!(d.findings.iter().any(|f| f.family == Family::Reversal));
+    assert!(d.extended.held_out_rms * 1e3 < 1.1 * NOISE_UM);
+}
+
+#[test]
+fn hidden_scale_error_is_named_scale() {
+    let d = run(&write_dataset(
+        "scale",
+        Hidden {
+            scale_ppm: 12.0,
+            ..Hidden::default()
+        },
+        13,
+    ));
+    assert_eq!(
+        d.findings.len(),
+        1,
+        "{:?}",
+        d.findings.iter().map(|f| &f.name).collect::<Vec<_>>()
+    );
+    assert_eq!(d.findings[0].family, Family::Scale);
+    let e = &d.findings[0].estimates[0];
+    assert!(
+        within(e.value * 1e6, e.uncertainty * 1e6, 12.0, 2.0),
+        "{}",
+        e.text
+    );
+}
+
+#[test]
+fn bad_axis_files_give_errors_naming_the_line() {
+    let dir = std::env::temp_dir().join(format!("mte-diagnose-axis-bad-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::write(
+        dir.join("runs.csv"),
+        "run,direction,x_mm,deviation_um\n1,+,0,1.0\n1,+,10,abc\n",
+    )
+    .unwrap();
+    std::fs::write(
+        dir.join("m.json"),
+        r#"{"format": "mte-dataset/1", "kind": "axis", "axis": "X", "data": "runs.csv"}"#,
+    )
+    .unwrap();
+    let err = load(&dir.join("m.json"))
+        .err()
+        .expect("bad number rejected")
+        .to_string();
+    assert!(
+        err.contains("line 3") && err.contains("deviation_um"),
+        "{err}"
+    );
+    std::fs::write(
+        dir.join("m2.json"),
+        r#"{"format": "mte-dataset/1", "kind": "axis", "data": "runs.csv"}"#,
+    )
+    .unwrap();
+    let err = load(&dir.join("m2.json"))
+        .err()
+        .expect("missing axis rejected")
+        .to_string();
+    assert!(err.contains("axis"), "{err}");
+    std::fs::write(
+        dir.join("runs2.csv"),
+        "run,direction,x_mm,deviation_um\n1,?,0,1.0\n",
+    )
+    .unwrap();
+    std::fs::write(
+        dir.join("m3.json"),
+        r#"{"format": "mte-dataset/1", "kind": "axis", "axis": "X", "data": "runs2.csv"}"#,
+    )
+    .unwrap();
+    let err = load(&dir.join("m3.json"))
+        .err()
+        .expect("bad direction rejected")
+        .to_string();
+    assert!(err.contains("line 2") && err.contains("direction"), "{err}");
+}
