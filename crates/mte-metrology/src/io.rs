@@ -1,0 +1,340 @@
+//! Text inputs: CSV tables for the tracker network (format in `docs/formats.md`) and a small
+//! reader for GNU Gama `gama-local` XML input files (3-D points and `s-distance` observations).
+//! Every error names the source, the line and the field.
+
+use crate::error::{MetrologyError, Result};
+use crate::network::{
+    DeadPath, LengthObservation, LengthUncertainty, Network, Station, Target, Vec3,
+};
+use std::collections::HashMap;
+
+fn perr(src: &str, line: usize, what: impl Into<String>) -> MetrologyError {
+    MetrologyError::Parse {
+        source_name: src.to_string(),
+        line,
+        what: what.into(),
+    }
+}
+
+/// A parsed CSV table: header names and rows (with their 1-based line numbers).
+#[derive(Clone, Debug)]
+pub struct Csv {
+    /// Source name used in errors.
+    pub source_name: String,
+    /// Header fields (trimmed).
+    pub header: Vec<String>,
+    /// (line number, fields).
+    pub rows: Vec<(usize, Vec<String>)>,
+}
+
+impl Csv {
+    /// Parse comma-separated text; `#` starts a comment line; blank lines are skipped.
+    ///
+    /// # Errors
+    /// Missing header or a row with a different number of fields.
+    pub fn parse(source_name: &str, text: &str) -> Result<Csv> {
+        let mut header: Option<Vec<String>> = None;
+        let mut rows = Vec::new();
+        for (i, raw) in text.lines().enumerate() {
+            let line = raw.trim();
+            if line.is_empty() || line.starts_with('#') {
+                continue;
+            }
+            let f: Vec<String> = line.split(',').map(|s| s.trim().to_string()).collect();
+            match &header {
+                None => header = Some(f),
+                Some(h) => {
+                    if f.len() != h.len() {
+                        return Err(perr(
+                            source_name,
+                            i + 1,
+                            format!("{} fields, header has {}", f.len(), h.len()),
+                        ));
+                    }
+                    rows.push((i + 1, f));
+                }
+            }
+        }
+        let header =
+            header.ok_or_else(|| perr(source_name, 1, "empty file: expected a header line"))?;
+        Ok(Csv {
+            source_name: source_name.to_string(),
+            header,
+            rows,
+        })
+    }
+
+    /// Column index of a required header name.
+    ///
+    /// # Errors
+    /// The column is missing.
+    pub fn col(&self, name: &str) -> Result<usize> {
+        self.header.iter().position(|h| h == name).ok_or_else(|| {
+            perr(
+                &self.source_name,
+                1,
+                format!(
+                    "missing column `{name}` (header: {})",
+                    self.header.join(",")
+                ),
+            )
+        })
+    }
+
+    /// Optional column.
+    pub fn opt_col(&self, name: &str) -> Option<usize> {
+        self.header.iter().position(|h| h == name)
+    }
+
+    /// Parse a finite number in a row/column.
+    ///
+    /// # Errors
+    /// Not a finite number.
+    pub fn num(&self, row: &(usize, Vec<String>), col: usize) -> Result<f64> {
+        let s = &row.1[col];
+        match s.parse::<f64>() {
+            Ok(v) if v.is_finite() => Ok(v),
+            _ => Err(perr(
+                &self.source_name,
+                row.0,
+                format!(
+                    "field `{}`: expected a finite number, got `{s}`",
+                    self.header[col]
+                ),
+            )),
+        }
+    }
+}
+
+/// Build a network from three CSV texts:
+/// * stations: `id,x_mm,y_mm,z_mm[,dead_path_mm][,dead_path]` (`dead_path` = `free` | `fixed`, default `free`);
+/// * targets: `id,x_mm,y_mm,z_mm` (nominal, commanded positions);
+/// * lengths: `station,target,length_mm[,sigma_um]` (without `sigma_um`, σ from `default_u`).
+///
+/// # Errors
+/// Parse errors naming file, line and field; unknown station/target ids.
+///
+/// ```
+/// let st = "id,x_mm,y_mm,z_mm\nS1,0,0,0\n";
+/// let tg = "id,x_mm,y_mm,z_mm\nP1,100,0,0\n";
+/// let ln = "station,target,length_mm\nS1,P1,100.0\n";
+/// let net = mte_metrology::io::network_from_csv(("s", st), ("t", tg), ("l", ln),
+///     mte_metrology::network::LengthUncertainty::SEED004).unwrap();
+/// assert_eq!(net.observations[0].length_mm, 100.0);
+/// ```
+pub fn network_from_csv(
+    stations: (&str, &str),
+    targets: (&str, &str),
+    lengths: (&str, &str),
+    default_u: LengthUncertainty,
+) -> Result<Network> {
+    let sc = Csv::parse(stations.0, stations.1)?;
+    let (ci, cx, cy, cz) = (
+        sc.col("id")?,
+        sc.col("x_mm")?,
+        sc.col("y_mm")?,
+        sc.col("z_mm")?,
+    );
+    let cd = sc.opt_col("dead_path_mm");
+    let cf = sc.opt_col("dead_path");
+    let mut st = Vec::new();
+    for r in &sc.rows {
+        let dp = match cf.map(|c| r.1[c].to_ascii_lowercase()) {
+            None => DeadPath::Free,
+            Some(s) if s == "free" || s.is_empty() => DeadPath::Free,
+            Some(s) if s == "fixed" => DeadPath::Fixed,
+            Some(s) => {
+                return Err(perr(
+                    &sc.source_name,
+                    r.0,
+                    format!("field `dead_path`: expected `free` or `fixed`, got `{s}`"),
+                ));
+            }
+        };
+        st.push(Station {
+            id: r.1[ci].clone(),
+            position_mm: Vec3::new(sc.num(r, cx)?, sc.num(r, cy)?, sc.num(r, cz)?),
+            dead_path_mm: match cd {
+                Some(c) => sc.num(r, c)?,
+                None => 0.0,
+            },
+            dead_path: dp,
+        });
+    }
+    let tc = Csv::parse(targets.0, targets.1)?;
+    let (ti, tx, ty, tz) = (
+        tc.col("id")?,
+        tc.col("x_mm")?,
+        tc.col("y_mm")?,
+        tc.col("z_mm")?,
+    );
+    let mut tg = Vec::new();
+    for r in &tc.rows {
+        tg.push(Target {
+            id: r.1[ti].clone(),
+            nominal_mm: Vec3::new(tc.num(r, tx)?, tc.num(r, ty)?, tc.num(r, tz)?),
+        });
+    }
+    let smap: HashMap<&str, usize> = st
+        .iter()
+        .enumerate()
+        .map(|(i, s)| (s.id.as_str(), i))
+        .collect();
+    let tmap: HashMap<&str, usize> = tg
+        .iter()
+        .enumerate()
+        .map(|(i, s)| (s.id.as_str(), i))
+        .collect();
+    let lc = Csv::parse(lengths.0, lengths.1)?;
+    let (ls, lt, ll) = (lc.col("station")?, lc.col("target")?, lc.col("length_mm")?);
+    let lsig = lc.opt_col("sigma_um");
+    let mut obs = Vec::new();
+    for r in &lc.rows {
+        let s = *smap.get(r.1[ls].as_str()).ok_or_else(|| {
+            perr(
+                &lc.source_name,
+                r.0,
+                format!("field `station`: unknown station id `{}`", r.1[ls]),
+            )
+        })?;
+        let t = *tmap.get(r.1[lt].as_str()).ok_or_else(|| {
+            perr(
+                &lc.source_name,
+                r.0,
+                format!("field `target`: unknown target id `{}`", r.1[lt]),
+            )
+        })?;
+        let l = lc.num(r, ll)?;
+        if l < 0.0 {
+            return Err(perr(
+                &lc.source_name,
+                r.0,
+                format!("field `length_mm`: negative length {l}"),
+            ));
+        }
+        let sigma_mm = match lsig {
+            Some(c) => {
+                let v = lc.num(r, c)?;
+                if v <= 0.0 {
+                    return Err(perr(
+                        &lc.source_name,
+                        r.0,
+                        format!("field `sigma_um`: must be > 0, got {v}"),
+                    ));
+                }
+                v * 1e-3
+            }
+            None => default_u.sigma_mm(l),
+        };
+        obs.push(LengthObservation {
+            station: s,
+            target: t,
+            length_mm: l,
+            sigma_mm,
+        });
+    }
+    Ok(Network {
+        stations: st,
+        targets: tg,
+        observations: obs,
+    })
+}
+
+fn attr(tag: &str, name: &str) -> Option<String> {
+    let key = format!(" {name}=\"");
+    let i = tag.find(&key)? + key.len();
+    let j = tag[i..].find('"')? + i;
+    Some(tag[i..j].to_string())
+}
+
+/// Read a GNU Gama `gama-local` input (the simple structure of
+/// `fixtures/metrology-xcheck/mlat-free-4x24.gkf`): `<point id x y z adj>` in metres
+/// (`adj="XYZ"` = constrained target, `adj="xyz"` = free station), `<obs from>` with
+/// `<s-distance to val stdev>` (val in m, stdev in mm). Coordinates become mm, dead paths are
+/// fixed at 0 (Gama has no additive constant).
+///
+/// # Errors
+/// A missing attribute or unknown point, naming the line.
+pub fn network_from_gama(source_name: &str, text: &str) -> Result<Network> {
+    let mut stations = Vec::new();
+    let mut targets = Vec::new();
+    let mut raw_obs: Vec<(usize, String, String, f64, f64)> = Vec::new();
+    let mut from: Option<String> = None;
+    for (i, line) in text.lines().enumerate() {
+        let l = line.trim();
+        let num = |name: &str| -> Result<f64> {
+            let v = attr(l, name)
+                .ok_or_else(|| perr(source_name, i + 1, format!("missing attribute `{name}`")))?;
+            v.parse::<f64>()
+                .ok()
+                .filter(|x| x.is_finite())
+                .ok_or_else(|| {
+                    perr(
+                        source_name,
+                        i + 1,
+                        format!("attribute `{name}`: expected a number, got `{v}`"),
+                    )
+                })
+        };
+        if l.starts_with("<point ") {
+            let id = attr(l, "id").ok_or_else(|| perr(source_name, i + 1, "point without `id`"))?;
+            let p = Vec3::new(num("x")?, num("y")?, num("z")?) * 1000.0;
+            match attr(l, "adj").as_deref() {
+                Some("XYZ") => targets.push(Target { id, nominal_mm: p }),
+                Some("xyz") => stations.push(Station {
+                    id,
+                    position_mm: p,
+                    dead_path_mm: 0.0,
+                    dead_path: DeadPath::Fixed,
+                }),
+                other => {
+                    return Err(perr(
+                        source_name,
+                        i + 1,
+                        format!(
+                            "point `{id}`: adj must be `XYZ` (target) or `xyz` (station), got {other:?}"
+                        ),
+                    ));
+                }
+            }
+        } else if l.starts_with("<obs ") {
+            from = Some(
+                attr(l, "from").ok_or_else(|| perr(source_name, i + 1, "<obs> without `from`"))?,
+            );
+        } else if l.starts_with("<s-distance ") {
+            let f = from
+                .clone()
+                .ok_or_else(|| perr(source_name, i + 1, "s-distance outside <obs from=...>"))?;
+            let to =
+                attr(l, "to").ok_or_else(|| perr(source_name, i + 1, "s-distance without `to`"))?;
+            raw_obs.push((i + 1, f, to, num("val")? * 1000.0, num("stdev")?));
+        }
+    }
+    let mut obs = Vec::new();
+    for (line, f, t, v, s) in raw_obs {
+        let (si, ti) = match (
+            stations.iter().position(|x| x.id == f),
+            targets.iter().position(|x| x.id == t),
+        ) {
+            (Some(a), Some(b)) => (a, b),
+            _ => {
+                return Err(perr(
+                    source_name,
+                    line,
+                    format!("s-distance {f} → {t}: `from` must be a station, `to` a target"),
+                ));
+            }
+        };
+        obs.push(LengthObservation {
+            station: si,
+            target: ti,
+            length_mm: v,
+            sigma_mm: s,
+        });
+    }
+    Ok(Network {
+        stations,
+        targets,
+        observations: obs,
+    })
+}
