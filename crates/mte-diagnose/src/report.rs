@@ -47,7 +47,7 @@ pub fn markdown(d: &Diagnosis, title: &str) -> String {
             d.base.sigma0,
             d.base
                 .chi2_p_value
-                .map(|p| format!(" (χ² test p = {})", p_text(p)))
+                .map(|p| format!(" (χ² test {})", p_text(p)))
                 .unwrap_or_default()
         );
     } else {
@@ -61,7 +61,7 @@ pub fn markdown(d: &Diagnosis, title: &str) -> String {
             let _ = writeln!(s, "  {}.", f.meaning);
             let _ = writeln!(
                 s,
-                "  Held-out RMS {} → {} µm (p = {}).",
+                "  Held-out RMS {} → {} µm ({}).",
                 um(f.held_out_rms_before),
                 um(f.held_out_rms_after),
                 p_text(f.p_value)
@@ -94,7 +94,7 @@ pub fn markdown(d: &Diagnosis, title: &str) -> String {
             };
             let _ = writeln!(
                 s,
-                "Residuals of the extended model are {consistent} the stated noise (σ0 = {:.2}, χ² p = {}).\n",
+                "Residuals of the extended model are {consistent} the stated noise (σ0 = {:.2}, χ² test {}).\n",
                 d.extended.sigma0,
                 p_text(p)
             );
@@ -174,7 +174,7 @@ pub fn markdown(d: &Diagnosis, title: &str) -> String {
             .take(4)
             .map(|c| {
                 format!(
-                    "{} (p = {}{})",
+                    "{} ({}{})",
                     c.name,
                     p_text(c.p_value),
                     c.held_out_rms

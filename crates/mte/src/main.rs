@@ -15,11 +15,14 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
+    /// Model-discrepancy diagnosis of a measured dataset: what the model gets wrong, the named cause, the gain.
+    Diagnose(cmd::diagnose::Args),
 }
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result: Result<(), mte::CliError> = match cli.command {
+        Command::Diagnose(args) => cmd::diagnose::run(&args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
