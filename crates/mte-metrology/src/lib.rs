@@ -4,7 +4,9 @@
 
 pub mod adjust;
 pub mod error;
+pub mod gum;
 pub mod io;
+pub mod iso230_2;
 pub mod network;
 pub mod simulate;
 pub mod stats;
