@@ -1,21 +1,615 @@
-//! Observation models of machine datasets (R-test, laser tracker): how each kinematic error slot
-//! reaches the observations, from the machine's first-order kinematics.
+//! Observation models of machine datasets: how each kinematic error slot reaches the
+//! observations, from the machine's first-order kinematics ([`Machine::jacobian`]), and the ISO
+//! 230-1 names engineers use for the slots.
 
 use std::path::Path;
 
+use mte_kinematics::{AxisKind, Machine, SlotKind};
+use mte_linalg::{DMat, DVec, Vec3};
+
+use crate::candidate::{SlotEffect, SlotRole, physical_effects};
+use crate::data::{Observations, Variable, VariableKind};
 use crate::dataset::{Manifest, Prepared, Table};
+use crate::term::{Family, Quantity, Term};
 use crate::{DiagnoseError, Result};
 
 /// Prepares an R-test or tracker dataset.
 pub(crate) fn prepare_machine_dataset(
     kind: &str,
-    _manifest: &Manifest,
-    _table: &Table,
-    _dir: &Path,
+    manifest: &Manifest,
+    table: &Table,
+    dir: &Path,
     manifest_path: &Path,
 ) -> Result<Prepared> {
-    Err(DiagnoseError::Dataset {
+    let field_error = |detail: String| DiagnoseError::Dataset {
         path: manifest_path.display().to_string(),
-        detail: format!("field `kind`: `{kind}`, expected one of axis, rtest, tracker"),
+        detail,
+    };
+    match kind {
+        "rtest" => {
+            let machine = load_machine(manifest, dir, manifest_path)?;
+            prepare_rtest(manifest, table, &machine, manifest_path)
+        }
+        other => Err(field_error(format!(
+            "field `kind`: `{other}`, expected one of axis, rtest"
+        ))),
+    }
+}
+
+fn load_machine(manifest: &Manifest, dir: &Path, manifest_path: &Path) -> Result<Machine> {
+    let name = manifest
+        .machine
+        .as_deref()
+        .ok_or_else(|| DiagnoseError::Dataset {
+            path: manifest_path.display().to_string(),
+            detail: "field `machine`: missing (a library machine name or a machine JSON file)"
+                .into(),
+        })?;
+    let file = dir.join(name);
+    let machine = if file.is_file() {
+        Machine::from_file(&file)
+    } else {
+        Machine::library(name)
+    };
+    machine.map_err(|e| DiagnoseError::Dataset {
+        path: manifest_path.display().to_string(),
+        detail: format!("field `machine`: {e}"),
     })
+}
+
+/// ISO 230-1 letter of a slot component: X, Y, Z for translations, A, B, C for rotations.
+fn component_letter(component: usize) -> char {
+    ['X', 'Y', 'Z', 'A', 'B', 'C'][component]
+}
+
+/// The ISO 230-1 view of one kinematic slot: name, meaning and role.
+struct SlotName {
+    name: String,
+    label: String,
+    meaning: String,
+    role: SlotRole,
+}
+
+/// Names a slot the way ISO 230-1 does: a component error `E{dir}{axis}` for a motion slot of
+/// an axis (EXX positioning, EYX straightness, EAX roll …), a location error `E{dir}0{axis}`
+/// for a position slot of an axis, a setup error for the tool and the workpiece.
+fn slot_name(machine: &Machine, slot: usize) -> SlotName {
+    let s = machine.error_slots()[slot];
+    let c = s.component.index();
+    let letter = component_letter(c);
+    let body = &machine.bodies()[s.body];
+    match (machine.slot_axis(slot), s.kind) {
+        (Some(axis), SlotKind::Motion) => {
+            let a = axis.name.as_str();
+            let own = axis_component(machine, slot);
+            let (positioning, straightness) = match axis.kind {
+                AxisKind::Linear => (c < 3 && own == Some(c), c < 3 && own != Some(c)),
+                AxisKind::Rotary => (c >= 3 && own == Some(c), false),
+            };
+            let what = match (axis.kind, c < 3, positioning, straightness) {
+                (_, _, true, _) => "positioning error".to_string(),
+                (_, _, _, true) => format!("straightness error in {letter}"),
+                (AxisKind::Linear, false, _, _) => {
+                    format!("angular error about {}", ['X', 'Y', 'Z'][c - 3])
+                }
+                (AxisKind::Rotary, true, _, _) => format!(
+                    "{} error motion in {letter}",
+                    if own.is_some_and(|o| o == c + 3) {
+                        "axial"
+                    } else {
+                        "radial"
+                    }
+                ),
+                _ => format!("tilt error motion about {}", ["X", "Y", "Z"][c.max(3) - 3]),
+            };
+            SlotName {
+                name: format!("E{letter}{a}"),
+                label: format!("{what} of {a}"),
+                meaning: format!("{what} of the {a} axis, a function of its position"),
+                role: SlotRole::Component {
+                    axis: a.to_string(),
+                    positioning,
+                    straightness,
+                },
+            }
+        }
+        (Some(axis), SlotKind::Position) => {
+            let a = axis.name.as_str();
+            let what = if c < 3 {
+                format!("position of the {a} axis line in {letter}")
+            } else {
+                format!(
+                    "orientation of the {a} axis about {}",
+                    ['X', 'Y', 'Z'][c - 3]
+                )
+            };
+            SlotName {
+                name: format!("E{letter}0{a}"),
+                label: format!("location error {what}"),
+                meaning: format!("{what} differs from nominal (a location error of ISO 230-7)"),
+                role: SlotRole::Constant {
+                    family: Family::Location,
+                },
+            }
+        }
+        (None, _) => SlotName {
+            name: format!(
+                "{} {}{}",
+                body.name,
+                if c < 3 { "offset " } else { "tilt " },
+                letter
+            ),
+            label: format!(
+                "setup error of the {} ({}{})",
+                body.name,
+                if c < 3 { "offset in " } else { "tilt about " },
+                letter
+            ),
+            meaning: format!("the {} sits off its nominal place (setup error)", body.name),
+            role: SlotRole::Constant {
+                family: Family::Setup,
+            },
+        },
+    }
+}
+
+/// The slot component (0–5) that lies along the axis' own direction, if the axis is parallel
+/// to a machine axis.
+fn axis_component(machine: &Machine, slot: usize) -> Option<usize> {
+    let axis = machine.slot_axis(slot)?;
+    let d = axis.direction;
+    let k = (0..3).find(|&k| (d[k].abs() - 1.0).abs() < 1e-9)?;
+    Some(match axis.kind {
+        AxisKind::Linear => k,
+        AxisKind::Rotary => k + 3,
+    })
+}
+
+/// Squareness of a linear axis: the linear part of its straightness. The axis `a` tilted by θ
+/// about the third direction `r` moves by `θ (r × a)` per unit travel, so the straightness in
+/// direction `d` grows as `θ ((r × a)·d) · s` with the axis coordinate `s`.
+fn squareness_effect(
+    name: &SlotName,
+    column: &DVec,
+    coordinate: &[f64],
+    slot_dir: usize,
+    axis_dir: usize,
+) -> Option<SlotEffect> {
+    let SlotRole::Component {
+        axis,
+        straightness: true,
+        ..
+    } = &name.role
+    else {
+        return None;
+    };
+    let r = 3 - slot_dir - axis_dir;
+    let (mut rv, mut av, mut dv) = (Vec3::zeros(), Vec3::zeros(), Vec3::zeros());
+    rv[r] = 1.0;
+    av[axis_dir] = 1.0;
+    dv[slot_dir] = 1.0;
+    let sign = rv.cross(&av).dot(&dv);
+    let plane: String = [component_letter(axis_dir), component_letter(slot_dir)]
+        .iter()
+        .collect();
+    let iso = format!("E{}0{axis}", component_letter(r + 3));
+    Some(SlotEffect {
+        name: iso.clone(),
+        label: format!("squareness of {axis} in the {plane} plane ({iso})"),
+        meaning: format!(
+            "the {axis} axis is not square to the machine frame in the {plane} plane: it moves along a slightly tilted line"
+        ),
+        quantity: Quantity::Angle,
+        role: SlotRole::Constant {
+            family: Family::Squareness,
+        },
+        column: DVec::from_fn(column.len(), |i, _| sign * column[i] * coordinate[i]),
+        separated_by: None,
+    })
+}
+
+/// The body that follows `body` on its kinematic branch (towards the tool or the workpiece).
+fn child_on_branch(machine: &Machine, body: usize) -> Option<usize> {
+    [machine.tool_chain(), machine.workpiece_chain()]
+        .into_iter()
+        .find_map(|chain| {
+            chain
+                .iter()
+                .position(|&b| b == body)
+                .and_then(|k| chain.get(k + 1).copied())
+        })
+}
+
+/// Column of a location error of a rotary axis as ISO 230-7 and the R-test see it: the axis
+/// turns about a displaced or tilted line while the parts it carries were set up at home, so
+/// the motion is `E · S(q) · E⁻¹` (E the error transform), not `E · S(q)`. To first order that is
+/// the axis' own position slot with twist e plus the next body's position slot with the twist
+/// `−(v − t × ω, ω)`, t the next body's offset (home frames are parallel, so the offset is a pure
+/// translation and the adjoint reduces to this).
+fn rotary_location_column(
+    machine: &Machine,
+    s: &DMat,
+    body: usize,
+    component: usize,
+) -> Option<DVec> {
+    let child = child_on_branch(machine, body)?;
+    let slot = |b: usize, k: usize| {
+        machine
+            .error_slots()
+            .iter()
+            .position(|e| e.body == b && e.kind == SlotKind::Position && e.component.index() == k)
+    };
+    let own = slot(body, component)?;
+    let t = machine.body_home_mm(child) - machine.body_home_mm(body);
+    let (mut v, mut w) = (Vec3::zeros(), Vec3::zeros());
+    if component < 3 {
+        v[component] = 1.0
+    } else {
+        w[component - 3] = 1.0
+    }
+    let v_child = -(v - t.cross(&w));
+    let mut col = s.column(own).into_owned();
+    for k in 0..6 {
+        let coef = if k < 3 { v_child[k] } else { -w[k - 3] };
+        if coef != 0.0 {
+            col += s.column(slot(child, k)?) * coef;
+        }
+    }
+    Some(col)
+}
+
+/// Builds the named slot effects of a machine from the per-observation sensitivities `s`
+/// (n × n_slots), the axis values per observation, and hints on what separates them.
+///
+/// Position slots of linear axes are left out: their translations are constant offsets (setup
+/// errors say the same) and their rotations turn the whole branch downstream, which the
+/// squareness and angular component errors describe in the terms engineers use.
+fn slot_effects(
+    machine: &Machine,
+    s: &DMat,
+    axes: &[Vec<f64>],
+    hint: &dyn Fn(&SlotName) -> Option<String>,
+) -> Vec<SlotEffect> {
+    let mut out = Vec::new();
+    for j in 0..machine.n_slots() {
+        let slot = machine.error_slots()[j];
+        let c = slot.component.index();
+        let axis = machine.slot_axis(j);
+        let column = match (axis.map(|a| a.kind), slot.kind) {
+            (Some(AxisKind::Linear), SlotKind::Position) => continue,
+            (Some(AxisKind::Rotary), SlotKind::Position) => {
+                match rotary_location_column(machine, s, slot.body, c) {
+                    Some(col) => col,
+                    None => continue,
+                }
+            }
+            _ => s.column(j).into_owned(),
+        };
+        if column.amax() < 1e-12 {
+            continue;
+        }
+        let name = slot_name(machine, j);
+        if let (Some(axis), SlotKind::Motion) = (axis, slot.kind) {
+            if axis.kind == AxisKind::Linear && c < 3 {
+                if let (Some(k), Some(own)) =
+                    (machine.axis_index(&axis.name), axis_component(machine, j))
+                {
+                    if let Some(sq) = squareness_effect(&name, &column, &axes[k], c, own) {
+                        let hint = hint(&name);
+                        out.push(SlotEffect {
+                            separated_by: hint,
+                            ..sq
+                        });
+                    }
+                }
+            }
+        }
+        out.push(SlotEffect {
+            separated_by: hint(&name),
+            name: name.name,
+            label: name.label,
+            meaning: name.meaning,
+            quantity: if c < 3 {
+                Quantity::Length
+            } else {
+                Quantity::Angle
+            },
+            role: name.role,
+            column,
+        });
+    }
+    out
+}
+
+/// Reads the commanded axes of a machine from `<axis>_mm` / `<axis>_deg` columns (rad inside).
+fn read_axes(machine: &Machine, table: &Table) -> Result<Vec<Vec<f64>>> {
+    machine
+        .axes()
+        .iter()
+        .map(|axis| {
+            let lower = axis.name.to_lowercase();
+            match axis.kind {
+                AxisKind::Linear => table.numbers(table.require(&format!("{lower}_mm"))?),
+                AxisKind::Rotary => Ok(table
+                    .numbers(table.require(&format!("{lower}_deg"))?)?
+                    .into_iter()
+                    .map(f64::to_radians)
+                    .collect()),
+            }
+        })
+        .collect()
+}
+
+/// Setup index of each row from the `setup` column, checked against the manifest's setups.
+fn read_setups(manifest: &Manifest, table: &Table) -> Result<Vec<usize>> {
+    let col = table.require("setup")?;
+    (0..table.len())
+        .map(|r| {
+            let id = table.text(r, col);
+            manifest
+                .setups
+                .iter()
+                .position(|s| s.id == id)
+                .ok_or_else(|| {
+                    let known: Vec<&str> = manifest.setups.iter().map(|s| s.id.as_str()).collect();
+                    table.error(
+                        r,
+                        format!(
+                            "column `setup`: `{id}` is not a setup of the manifest ({})",
+                            known.join(", ")
+                        ),
+                    )
+                })
+        })
+        .collect()
+}
+
+/// ISO 10791-6 R-test data: per row the commanded axes, the setup (ball position) and the 3-D
+/// reading `d = p_ball − p_nest` in the spindle (tool) frame, µm.
+///
+/// First-order model: the nest sits at the tool tip, which the controller puts on the nominal
+/// ball centre; an error vector e moves the tip by δp = J_pos(q)·e in the workpiece frame, so the
+/// reading is `−R_wt(q)ᵀ · J_pos(q) · e`, R_wt the nominal tool orientation in the workpiece frame.
+fn prepare_rtest(
+    manifest: &Manifest,
+    table: &Table,
+    machine: &Machine,
+    manifest_path: &Path,
+) -> Result<Prepared> {
+    let rows = table.len();
+    if rows < 8 {
+        return Err(DiagnoseError::Dataset {
+            path: table.path().into(),
+            detail: format!("{rows} rows: an R-test trajectory needs at least 8"),
+        });
+    }
+    if manifest.setups.is_empty() {
+        return Err(DiagnoseError::Dataset {
+            path: manifest_path.display().to_string(),
+            detail: "field `setups`: at least one ball position".into(),
+        });
+    }
+    let axes = read_axes(machine, table)?;
+    let setups = read_setups(manifest, table)?;
+    let time = table.column("t_s").map(|c| table.numbers(c)).transpose()?;
+    let readings: Vec<Vec<f64>> = ["dx_um", "dy_um", "dz_um"]
+        .iter()
+        .map(|c| table.numbers(table.require(c)?))
+        .collect::<Result<_>>()?;
+    let n = 3 * rows;
+    let n_slots = machine.n_slots();
+    let mut s = DMat::zeros(n, n_slots);
+    let mut rotations = Vec::with_capacity(rows);
+    let zero = vec![0.0; n_slots];
+    let mut jac = DMat::zeros(6, n_slots);
+    for r in 0..rows {
+        let q: Vec<f64> = axes.iter().map(|a| a[r]).collect();
+        machine.jacobian_into(&q, &mut jac);
+        let rot = machine
+            .tool_in_workpiece(&q, &zero)
+            .rotation
+            .to_rotation_matrix()
+            .into_inner();
+        let sens = -(rot.transpose() * jac.rows(0, 3));
+        for ch in 0..3 {
+            s.row_mut(3 * r + ch).copy_from(&sens.row(ch));
+        }
+        rotations.push(rot);
+    }
+    let values = DVec::from_fn(n, |i, _| readings[i % 3][i / 3] * 1e-3);
+    let mut variables: Vec<Variable> = machine
+        .axes()
+        .iter()
+        .zip(&axes)
+        .map(|(a, v)| Variable {
+            name: a.name.clone(),
+            kind: if a.kind == AxisKind::Rotary {
+                VariableKind::RotaryAxis
+            } else {
+                VariableKind::LinearAxis
+            },
+            values: v.iter().flat_map(|x| [*x; 3]).collect(),
+        })
+        .collect();
+    if let Some(t) = &time {
+        variables.push(Variable {
+            name: "t".into(),
+            kind: VariableKind::Time,
+            values: t.iter().flat_map(|x| [*x; 3]).collect(),
+        });
+    }
+    let observations = Observations {
+        values,
+        sigma: manifest.noise_um.map(|u| DVec::from_element(n, u * 1e-3)),
+        variables,
+        setup: setups.iter().flat_map(|s| [*s; 3]).collect(),
+        setup_names: manifest.setups.iter().map(|s| s.id.clone()).collect(),
+        channel: (0..n).map(|i| i % 3).collect(),
+        channel_names: vec!["dx".into(), "dy".into(), "dz".into()],
+        setup_kind: "ball position".into(),
+    };
+    observations.validate()?;
+    let axes_per_obs: Vec<Vec<f64>> = axes
+        .iter()
+        .map(|v| v.iter().flat_map(|x| [*x; 3]).collect())
+        .collect();
+    let hint = |name: &SlotName| {
+        match name.role {
+        SlotRole::Constant { family: Family::Location } => Some("a second ball position at another height or distance along the rotary axis (e.g. ball at ±Y on a B axis, or raised in Z)".to_string()),
+        SlotRole::Constant { family: Family::Setup } => Some("a second nest length or ball height".to_string()),
+        _ => None,
+    }
+    };
+    let effects = slot_effects(machine, &s, &axes_per_obs, &hint);
+
+    // Per-setup reading offsets: the nest's zero in each setup.
+    let mut base: Vec<Term> = Vec::new();
+    for (k, setup) in manifest.setups.iter().enumerate() {
+        for ch in 0..3 {
+            let col = DVec::from_fn(n, |i, _| {
+                if observations.setup[i] == k && i % 3 == ch {
+                    1.0
+                } else {
+                    0.0
+                }
+            });
+            let axis = ['x', 'y', 'z'][ch];
+            base.push(Term::single(
+                format!("{} d{axis} zero", setup.id),
+                format!("zero of the {axis} reading in setup {}", setup.id),
+                "the sensor nest's zero in this setup",
+                Family::Base,
+                col,
+                Quantity::Length,
+            ));
+        }
+    }
+    let base_names: Vec<String> = match &manifest.base_model {
+        Some(names) => names.clone(),
+        None => default_rtest_base(machine),
+    };
+    let mut candidates_effects = Vec::new();
+    for e in effects {
+        if base_names.contains(&e.name) {
+            base.push(
+                Term::single(
+                    e.name.clone(),
+                    e.label.clone(),
+                    e.meaning.clone(),
+                    Family::Base,
+                    e.column.clone(),
+                    e.quantity,
+                )
+                .separated_by_opt(e.separated_by.clone()),
+            );
+        } else {
+            candidates_effects.push(e);
+        }
+    }
+    for name in &base_names {
+        if !base.iter().any(|t| &t.name == name) {
+            return Err(DiagnoseError::Dataset {
+                path: manifest_path.display().to_string(),
+                detail: format!(
+                    "field `base_model`: `{name}` is not an error of {} that these data see",
+                    machine.name()
+                ),
+            });
+        }
+    }
+    // Ball position errors, in the workpiece frame: one set per distinct ball (setups that
+    // state the same ball position share it, as when the table turns one ball to another place).
+    let mut balls: Vec<([f64; 3], Vec<usize>)> = Vec::new();
+    for (k, setup) in manifest.setups.iter().enumerate() {
+        let Some(b) = setup.ball_mm else { continue };
+        match balls.iter_mut().find(|(p, _)| *p == b) {
+            Some((_, members)) => members.push(k),
+            None => balls.push((b, vec![k])),
+        }
+    }
+    for (ball, members) in &balls {
+        let ids: Vec<&str> = members
+            .iter()
+            .map(|&k| manifest.setups[k].id.as_str())
+            .collect();
+        let mut cols = DMat::zeros(n, 3);
+        for r in 0..rows {
+            if !members.contains(&setups[r]) {
+                continue;
+            }
+            let rt = rotations[r].transpose();
+            for ch in 0..3 {
+                for a in 0..3 {
+                    cols[(3 * r + ch, a)] = rt[(ch, a)];
+                }
+            }
+        }
+        let tag = format!("ball ({:.0}, {:.0}, {:.0})", ball[0], ball[1], ball[2]);
+        candidates_effects.extend((0..3).map(|a| SlotEffect {
+            name: format!("{tag} {}", ['X', 'Y', 'Z'][a]),
+            label: format!(
+                "position error in {} of the {tag} (setups {})",
+                ['X', 'Y', 'Z'][a],
+                ids.join(", ")
+            ),
+            meaning: "the precision ball sits off its stated position on the table".into(),
+            quantity: Quantity::Length,
+            role: SlotRole::Constant {
+                family: Family::Setup,
+            },
+            column: cols.column(a).into_owned(),
+            separated_by: Some(
+                "a measurement of the ball position on the table (touch probe)".into(),
+            ),
+        }));
+    }
+    let base = identifiable_subset(base, &observations);
+    let drifting: Vec<&Term> = base.iter().filter(|t| !t.name.ends_with(" zero")).collect();
+    let mut candidates = physical_effects(&observations, &candidates_effects, &drifting);
+    // The drift of the nest zero is the R-test's own thermal drift.
+    let zeros: Vec<&Term> = base.iter().filter(|t| t.name.ends_with(" zero")).collect();
+    if observations.variable_of_kind(VariableKind::Time).is_some() {
+        candidates.extend(physical_effects(&observations, &[], &zeros));
+    }
+    let title = manifest
+        .description
+        .clone()
+        .unwrap_or_else(|| format!("R-test on {}", machine.name()));
+    Ok(Prepared {
+        observations,
+        base,
+        candidates,
+        title,
+    })
+}
+
+/// The pivot model engineers fit first: the positions of each rotary axis line (the two
+/// location errors across the axis), as IBS's XOB/ZOB, XOC/YOC.
+fn default_rtest_base(machine: &Machine) -> Vec<String> {
+    let mut names = Vec::new();
+    for axis in machine.axes().iter().filter(|a| a.kind == AxisKind::Rotary) {
+        let own = (0..3).find(|&k| (axis.direction[k].abs() - 1.0).abs() < 1e-9);
+        for k in 0..3 {
+            if Some(k) != own {
+                names.push(format!("E{}0{}", component_letter(k), axis.name));
+            }
+        }
+    }
+    names
+}
+
+/// Keeps the base terms in order while each adds a direction the data can see; the dropped
+/// ones are combinations of the kept ones (their effect is already in the model).
+fn identifiable_subset(base: Vec<Term>, obs: &Observations) -> Vec<Term> {
+    let w = crate::fit::whitening(obs);
+    let mut kept: Vec<Term> = Vec::new();
+    for t in base {
+        let x = crate::fit::design(&kept.iter().collect::<Vec<_>>(), obs.len());
+        let projector = crate::fit::Projector::new(&x, &w);
+        let inc = projector.increment(&t.columns, &obs.values);
+        if inc.separability >= crate::fit::SEPARABILITY_TOLERANCE && inc.new_rank == t.width() {
+            kept.push(t);
+        }
+    }
+    kept
 }

@@ -356,10 +356,10 @@ pub fn diagnose(
                 let better = match &best {
                     None => true,
                     Some((bc, bv, br, _)) => {
-                        let (bw, tw) = (pool[*bc][*bv].width(), t.width());
-                        // Parsimony: within 1 % of the best held-out RMS, fewer coefficients win.
+                        let (b_cost, t_cost) = (complexity(&pool[*bc][*bv]), complexity(t));
+                        // Parsimony: within 1 % of the best held-out RMS the simpler cause wins.
                         if (r - br).abs() <= 0.01 * br {
-                            tw < bw || (tw == bw && r < *br)
+                            t_cost < b_cost || (t_cost == b_cost && r < *br)
                         } else {
                             r < *br
                         }
@@ -398,6 +398,7 @@ pub fn diagnose(
                 alternatives.push(pool[cj][vj].name.clone());
             }
         }
+        let separated_by = separating_hint(&chosen, &alternatives, &pool);
         let p_value = scored
             .iter()
             .find(|s| s.0 == ci)
@@ -413,7 +414,7 @@ pub fn diagnose(
             held_out_rms_before: cur_cv_rms,
             held_out_rms_after: new_rms,
             alternatives,
-            separated_by: chosen.separated_by.clone(),
+            separated_by,
             exposed_by: chosen.exposed_by.clone(),
         });
         steps.push(Step {
@@ -476,6 +477,46 @@ pub fn diagnose(
         residual_series,
         alpha: params.alpha,
     })
+}
+
+/// What would separate the chosen term from its alternatives: the hints of the chosen term and
+/// of the alternatives, each once.
+fn separating_hint(chosen: &Term, alternatives: &[String], pool: &[Vec<Term>]) -> Option<String> {
+    if alternatives.is_empty() {
+        return chosen.separated_by.clone();
+    }
+    let mut hints: Vec<String> = chosen.separated_by.iter().cloned().collect();
+    for name in alternatives {
+        if let Some(h) = pool
+            .iter()
+            .flatten()
+            .find(|t| &t.name == name)
+            .and_then(|t| t.separated_by.clone())
+        {
+            if !hints.contains(&h) {
+                hints.push(h);
+            }
+        }
+    }
+    (!hints.is_empty()).then(|| hints.join("; or "))
+}
+
+/// How much a term asks of the data: coefficients first, then hyper-parameters and
+/// dependence on time or polynomial degree (a constant location error is simpler than a drift
+/// that happens to look constant).
+fn complexity(t: &Term) -> (usize, usize) {
+    let shape = match t.family {
+        Family::Component { degree } => degree,
+        Family::Periodic { .. } => 2,
+        Family::Drift {
+            time_constant_s: None,
+        } => 1,
+        Family::Drift {
+            time_constant_s: Some(_),
+        } => 3,
+        _ => 0,
+    };
+    (t.width(), shape)
 }
 
 fn check_identifiable(base: &[Term], obs: &Observations, w: &DVec) -> Result<()> {

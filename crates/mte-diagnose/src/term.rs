@@ -171,6 +171,12 @@ impl Term {
         self
     }
 
+    /// Sets or clears the separating measurement.
+    pub fn separated_by_opt(mut self, hint: Option<String>) -> Self {
+        self.separated_by = hint;
+        self
+    }
+
     /// `true` when every column is zero to rounding: the effect does not reach these data.
     pub fn is_invisible(&self) -> bool {
         self.columns.iter().all(|v| v.abs() < 1e-15)

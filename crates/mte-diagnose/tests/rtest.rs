@@ -1,0 +1,286 @@
+//! Hidden effects in ISO 10791-6 R-test data on the seed 002 B/C trunnion machine.
+//!
+//! The generator simulates the measurement with the exact kinematics (full transforms) and
+//! writes CSV + manifest; the diagnosis reads only those files (first-order model, its own
+//! candidate library). The tests look at the named cause after the diagnosis has run.
+
+use std::path::PathBuf;
+
+use mte_diagnose::{DiagnoseParams, Diagnosis, diagnose, load};
+use mte_kinematics::Machine;
+use mte_linalg::Vec3;
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+use rand_distr::{Distribution, Normal};
+
+const MACHINE: &str = "seed002-bc-trunnion";
+const NOISE_UM: f64 = 0.5;
+
+/// An injected error: machine slot name and a value as a function of time (s).
+struct Injected {
+    slot: &'static str,
+    value: Box<dyn Fn(f64) -> f64>,
+}
+
+/// The B axis line displaced by `delta` (mm) along machine direction `k` while the cradle was set
+/// up at home: B turns about the displaced line, `Trans(δ)·Rot(b)·Trans(−δ)`, exactly: the B
+/// body's position error +δ and the C body's (next on the branch) −δ.
+fn b_pivot_shift(k: usize, delta: impl Fn(f64) -> f64 + Clone + 'static) -> Vec<Injected> {
+    let (b, c) = (
+        ["B.position.dx", "B.position.dy", "B.position.dz"][k],
+        ["C.position.dx", "C.position.dy", "C.position.dz"][k],
+    );
+    let d2 = delta.clone();
+    vec![
+        Injected {
+            slot: b,
+            value: Box::new(delta),
+        },
+        Injected {
+            slot: c,
+            value: Box::new(move |t| -d2(t)),
+        },
+    ]
+}
+
+/// The C axis line displaced in the same sense: C body +δ, workpiece body −δ.
+fn c_pivot_shift(k: usize, delta: f64) -> Vec<Injected> {
+    let (c, w) = (
+        ["C.position.dx", "C.position.dy", "C.position.dz"][k],
+        [
+            "workpiece.position.dx",
+            "workpiece.position.dy",
+            "workpiece.position.dz",
+        ][k],
+    );
+    vec![constant(c, delta), constant(w, -delta)]
+}
+
+/// The B axis line tilted by `alpha` (rad) about X through the machine origin:
+/// `Rot_x(α)·Rot_y(b)·Rot_x(−α)`. The C body's error transform Trans(d)·Rot(ε) must then equal
+/// `P_C⁻¹·Rot_x(−α)·P_C` with P_C = Trans(t), t = (0, 0, −100): ε = −α x̂ and
+/// d = Rot_x(−α)·t − t, written out exactly.
+fn b_tilt_about_x(alpha: f64) -> Vec<Injected> {
+    let t = Vec3::new(0.0, 0.0, -100.0);
+    let rot = mte_linalg::nalgebra::Rotation3::from_axis_angle(&Vec3::x_axis(), -alpha);
+    let d = rot * t - t;
+    vec![
+        constant("B.position.ex", alpha),
+        constant("C.position.ex", -alpha),
+        constant("C.position.dy", d.y),
+        constant("C.position.dz", d.z),
+    ]
+}
+
+fn constant(slot: &'static str, value: f64) -> Injected {
+    Injected {
+        slot,
+        value: Box::new(move |_| value),
+    }
+}
+
+/// The static pivot errors every dataset carries (part of the base model): mm.
+fn pivots() -> Vec<Injected> {
+    let mut v = b_pivot_shift(0, |_| 0.004);
+    v.extend(b_pivot_shift(2, |_| -0.012));
+    v.extend(c_pivot_shift(0, 0.008));
+    v.extend(c_pivot_shift(1, -0.005));
+    v
+}
+
+/// One setup: an id, the ball centre in table (workpiece) coordinates (mm), and the C angle at
+/// which BK1 runs (deg).
+type Setup = (&'static str, Vec3, f64);
+
+/// Per setup BK1 (B over ±90° with C at the setup's angle) then BK2 (C a full turn and back at
+/// B = 0), 4 s per reading, repeated `cycles` times.
+fn write_dataset(
+    name: &str,
+    balls: &[Setup],
+    errors: &[Injected],
+    cycles: usize,
+    seed: u64,
+) -> PathBuf {
+    let machine = Machine::library(MACHINE).unwrap();
+    let n_slots = machine.n_slots();
+    let dir =
+        std::env::temp_dir().join(format!("mte-diagnose-rtest-{name}-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let noise = Normal::new(0.0, NOISE_UM).unwrap();
+    let mut csv = String::from("setup,t_s,x_mm,y_mm,z_mm,b_deg,c_deg,dx_um,dy_um,dz_um\n");
+    let mut t = 0.0;
+    for _ in 0..cycles {
+        for (id, ball, c_bk1) in balls {
+            let mut program: Vec<(f64, f64)> = (0..=36)
+                .map(|k| ((-90.0 + 5.0 * k as f64).to_radians(), c_bk1.to_radians()))
+                .collect();
+            program.extend((0..=24).map(|k| (0.0, (15.0 * k as f64).to_radians())));
+            program.extend((0..24).rev().map(|k| (0.0, (15.0 * k as f64).to_radians())));
+            for &(b, c) in &program {
+                // The controller's linear axes: the nominal tip on the ball (the tip position is
+                // affine in the linear axes once the rotary angles are fixed).
+                let tip = |x: f64, y: f64, z: f64| {
+                    machine
+                        .tool_in_workpiece(&[x, y, z, b, c], &vec![0.0; n_slots])
+                        .translation
+                        .vector
+                };
+                let p0 = tip(0.0, 0.0, 0.0);
+                let m = mte_linalg::Mat3::from_columns(&[
+                    tip(1.0, 0.0, 0.0) - p0,
+                    tip(0.0, 1.0, 0.0) - p0,
+                    tip(0.0, 0.0, 1.0) - p0,
+                ]);
+                let lin = m.try_inverse().unwrap() * (ball - p0);
+                let q = [lin.x, lin.y, lin.z, b, c];
+                let mut e = vec![0.0; n_slots];
+                for inj in errors {
+                    e[machine.slot_index_by_name(inj.slot).unwrap()] += (inj.value)(t);
+                }
+                let actual = machine.tool_in_workpiece(&q, &e);
+                let reading = actual.rotation.inverse() * (ball - actual.translation.vector) * 1e3;
+                csv.push_str(&format!(
+                    "{id},{t:.1},{:.4},{:.4},{:.4},{:.3},{:.3},{:.4},{:.4},{:.4}\n",
+                    q[0],
+                    q[1],
+                    q[2],
+                    b.to_degrees(),
+                    c.to_degrees(),
+                    reading.x + noise.sample(&mut rng),
+                    reading.y + noise.sample(&mut rng),
+                    reading.z + noise.sample(&mut rng)
+                ));
+                t += 4.0;
+            }
+        }
+    }
+    std::fs::write(dir.join("rtest.csv"), csv).unwrap();
+    let setups: Vec<String> = balls
+        .iter()
+        .map(|(id, b, _)| {
+            format!(
+                r#"{{"id": "{id}", "ball_mm": [{}, {}, {}]}}"#,
+                b.x, b.y, b.z
+            )
+        })
+        .collect();
+    let manifest = format!(
+        r#"{{"format": "mte-dataset/1", "kind": "rtest", "machine": "{MACHINE}", "noise_um": {NOISE_UM}, "data": "rtest.csv", "setups": [{}]}}"#,
+        setups.join(", ")
+    );
+    let path = dir.join("manifest.json");
+    std::fs::write(&path, manifest).unwrap();
+    path
+}
+
+fn run(path: &PathBuf) -> Diagnosis {
+    let prepared = load(path).expect("dataset loads");
+    diagnose(
+        &prepared.observations,
+        prepared.base,
+        &prepared.candidates,
+        &DiagnoseParams::default(),
+    )
+    .expect("diagnosis runs")
+}
+
+fn names(d: &Diagnosis) -> Vec<String> {
+    d.findings.iter().map(|f| f.name.clone()).collect()
+}
+
+/// Seed 002's two positions: one ball 177 mm off the C axis, BK1 with C at 0° (ball at
+/// Y = +177 mm) and at 180° (Y = −177 mm).
+fn two_positions() -> Vec<Setup> {
+    let ball = Vec3::new(0.0, 177.0, 60.0);
+    vec![("C0", ball, 0.0), ("C180", ball, 180.0)]
+}
+
+fn one_position() -> Vec<Setup> {
+    vec![("C0", Vec3::new(0.0, 177.0, 60.0), 0.0)]
+}
+
+#[test]
+fn pivot_errors_only_yield_no_discovery() {
+    let d = run(&write_dataset("clean", &two_positions(), &pivots(), 1, 21));
+    assert!(d.no_discrepancy(), "false discovery: {:?}", names(&d));
+    // The base fit recovers the injected pivot positions (EX0B = 4 µm) within 2 u.
+    let ex0b = d
+        .base_parameters
+        .iter()
+        .find(|p| p.term == "EX0B")
+        .expect("EX0B in the base model");
+    let e = &ex0b.estimates[0];
+    assert!((e.value - 0.004).abs() <= 2.0 * e.uncertainty, "{}", e.text);
+}
+
+#[test]
+fn b_axis_squareness_to_y_is_found_with_two_ball_positions() {
+    // Seed 002: the B axis line not square to the Y motion in the Y–Z plane by 0.0031°.
+    let alpha = 0.0031_f64.to_radians();
+    let mut errors = pivots();
+    errors.extend(b_tilt_about_x(alpha));
+    let d = run(&write_dataset("square2", &two_positions(), &errors, 1, 22));
+    assert_eq!(
+        names(&d),
+        vec!["EA0B".to_string()],
+        "{}",
+        mte_diagnose::report::markdown(&d, "two balls")
+    );
+    assert!(
+        d.findings[0].alternatives.is_empty(),
+        "two positions separate it: {:?}",
+        d.findings[0].alternatives
+    );
+    let e = &d.findings[0].estimates[0];
+    assert!(
+        (e.value - alpha).abs() <= 2.0 * e.uncertainty,
+        "{} vs {alpha}",
+        e.text
+    );
+    assert!(
+        d.extended.held_out_rms * 1e3 < 1.1 * NOISE_UM,
+        "held-out RMS {}",
+        d.extended.held_out_rms
+    );
+}
+
+#[test]
+fn pivot_drift_over_repeated_cycles_is_found() {
+    // EX0B drifts by −0.2 µm/min while the machine warms up: 6 cycles, about 36 min.
+    let rate_mm_per_s = -0.2e-3 / 60.0;
+    let mut errors = pivots();
+    errors.extend(b_pivot_shift(0, move |t| rate_mm_per_s * t));
+    let d = run(&write_dataset("drift", &one_position(), &errors, 6, 23));
+    assert_eq!(
+        names(&d),
+        vec!["EX0B drift".to_string()],
+        "{}",
+        mte_diagnose::report::markdown(&d, "drift")
+    );
+    let e = &d.findings[0].estimates[0];
+    assert!(
+        (e.value - rate_mm_per_s).abs() <= 2.0 * e.uncertainty,
+        "{} vs {rate_mm_per_s}",
+        e.text
+    );
+}
+
+#[test]
+fn one_ball_position_cannot_separate_the_b_axis_tilt() {
+    // Seed 002's lesson: at one ball position the tilt of the B line hides in the pivot.
+    let alpha = 0.0031_f64.to_radians();
+    let mut errors = pivots();
+    errors.extend(b_tilt_about_x(alpha));
+    let d = run(&write_dataset("square1", &one_position(), &errors, 1, 24));
+    let report = mte_diagnose::report::markdown(&d, "one ball");
+    // Whatever explains part of the residual here, the report must say that the B tilt cannot be
+    // told apart from other causes with this data, and what would separate it.
+    let f = d
+        .findings
+        .iter()
+        .find(|f| f.name == "EA0B" || f.alternatives.iter().any(|a| a == "EA0B"))
+        .expect(&report);
+    assert!(!f.alternatives.is_empty(), "{report}");
+    assert!(report.contains("second ball position"), "{report}");
+}
