@@ -126,16 +126,22 @@ pub struct SmoothErrorField {
 }
 
 impl SmoothErrorField {
-    /// Field scaled to a maximum of `max_um` over `targets`.
+    /// Field scaled so that its largest error over `targets`, after removing the rigid motion
+    /// that the free network cannot see ([`align_to_nominal`]), is `max_um`.
     pub fn new(edge_mm: f64, targets: &[Target], max_um: f64) -> Self {
         let unit = SmoothErrorField {
             edge_mm,
             scale_mm: 1.0,
         };
-        let m = targets
+        let nominal: Vec<Vec3> = targets.iter().map(|t| t.nominal_mm).collect();
+        let actual: Vec<Vec3> = nominal.iter().map(|p| p + unit.eval(p) * 1e-3).collect();
+        let aligned = align_to_nominal(&actual, &nominal);
+        let m = aligned
             .iter()
-            .map(|t| unit.eval(&t.nominal_mm).norm())
-            .fold(0.0, f64::max);
+            .zip(&nominal)
+            .map(|(a, b)| (a - b).norm())
+            .fold(0.0, f64::max)
+            * 1e3;
         SmoothErrorField {
             edge_mm,
             scale_mm: if m > 0.0 { max_um * 1e-3 / m } else { 0.0 },

@@ -214,3 +214,60 @@ fn bad_inputs_are_errors() {
     );
     assert!(e.unwrap_err().to_string().contains("NaN"));
 }
+
+/// The linearised tracker measurement function (cached sensitivity) agrees with a full
+/// re-adjustment per trial: same seed → same draws → model values within 1 nm.
+#[test]
+fn linearised_tracker_matches_full_readjustment() {
+    use mte_metrology::adjust::{AdjustParams, adjust};
+    use mte_metrology::network::{LengthUncertainty, Vec3};
+    use mte_metrology::simulate::{SmoothErrorField, StationLayout, cube_edge_targets, simulate};
+    use mte_metrology::uncertainty::{FullReadjustment, LinearisedTracker, TrackerQuantity};
+    let targets = cube_edge_targets(500.0, 2);
+    let field = SmoothErrorField::new(500.0, &targets, 30.0);
+    let sim = simulate(
+        &StationLayout::FourLow.stations(500.0, true),
+        &targets,
+        &|p: &Vec3| field.eval(p),
+        LengthUncertainty::SEED004,
+        3,
+    )
+    .unwrap();
+    let adj = adjust(&sim.network, &AdjustParams::default()).unwrap();
+    let inputs = LinearisedTracker::inputs(&adj);
+    for q in [
+        TrackerQuantity::MaxDeviation,
+        TrackerQuantity::TargetComponent(7, 2),
+    ] {
+        let lin = LinearisedTracker::new(&adj, q).unwrap();
+        let full = FullReadjustment {
+            network: sim.network.clone(),
+            params: AdjustParams::default(),
+            quantity: q,
+        };
+        let p = McParams {
+            trials: 1024,
+            coverage: 0.95,
+            seed: 77,
+        };
+        let a = monte_carlo(&lin, &inputs, &p).unwrap();
+        let b = monte_carlo(&full, &inputs, &p).unwrap();
+        assert!(
+            (a.estimate - b.estimate).abs() < 1e-6,
+            "{} {}",
+            a.estimate,
+            b.estimate
+        );
+        assert!((a.standard_uncertainty - b.standard_uncertainty).abs() < 1e-6);
+        assert!((a.shortest_interval.1 - b.shortest_interval.1).abs() < 1e-6);
+        // and for one component the MC u equals the adjustment's σ (linear Gaussian)
+        if let TrackerQuantity::TargetComponent(j, c) = q {
+            let s = adj.targets[j].covariance()[(c, c)].sqrt();
+            assert!(
+                (a.standard_uncertainty / s - 1.0).abs() < 0.1,
+                "{} vs {s}",
+                a.standard_uncertainty
+            );
+        }
+    }
+}
