@@ -16,28 +16,62 @@ fn big_network(n: usize) -> mte_metrology::network::Network {
         .map(|i| {
             let (a, b, c) = (i % k, (i / k) % k, i / (k * k));
             let f = |t: usize| l * (t as f64 + 0.5) / k as f64;
-            Target { id: format!("T{i}"), nominal_mm: Vec3::new(f(a), f(b), f(c)) }
+            Target {
+                id: format!("T{i}"),
+                nominal_mm: Vec3::new(f(a), f(b), f(c)),
+            }
         })
         .collect();
-    let rel = [[-0.2, -0.2, -0.3], [1.2, -0.2, -0.2], [1.2, 1.2, -0.3], [-0.2, 1.2, -0.1], [-0.2, -0.2, 1.3], [1.2, -0.2, 1.2], [1.2, 1.2, 1.3], [-0.2, 1.2, 1.1]];
+    let rel = [
+        [-0.2, -0.2, -0.3],
+        [1.2, -0.2, -0.2],
+        [1.2, 1.2, -0.3],
+        [-0.2, 1.2, -0.1],
+        [-0.2, -0.2, 1.3],
+        [1.2, -0.2, 1.2],
+        [1.2, 1.2, 1.3],
+        [-0.2, 1.2, 1.1],
+    ];
     let stations: Vec<Station> = rel
         .iter()
         .enumerate()
-        .map(|(i, r)| Station { id: format!("S{i}"), position_mm: Vec3::new(r[0] * l, r[1] * l, r[2] * l), dead_path_mm: 0.0, dead_path: DeadPath::Free })
+        .map(|(i, r)| Station {
+            id: format!("S{i}"),
+            position_mm: Vec3::new(r[0] * l, r[1] * l, r[2] * l),
+            dead_path_mm: 0.0,
+            dead_path: DeadPath::Free,
+        })
         .collect();
-    simulate(&stations, &targets, &|p: &Vec3| Vec3::new(1e-5 * p.y, -1e-5 * p.x, 2e-5 * p.z), LengthUncertainty::SEED004, 1).unwrap().network
+    simulate(
+        &stations,
+        &targets,
+        &|p: &Vec3| Vec3::new(1e-5 * p.y, -1e-5 * p.x, 2e-5 * p.z),
+        LengthUncertainty::SEED004,
+        1,
+    )
+    .unwrap()
+    .network
 }
 
 fn benches(c: &mut Criterion) {
     let net = big_network(100_000);
     let mut g = c.benchmark_group("adjust");
     g.sample_size(10);
-    g.bench_function("adjust_8x100k", |b| b.iter(|| adjust(&net, &AdjustParams::default()).unwrap()));
+    g.bench_function("adjust_8x100k", |b| {
+        b.iter(|| adjust(&net, &AdjustParams::default()).unwrap())
+    });
     g.finish();
 
     let targets = cube_edge_targets(500.0, 2);
     let field = SmoothErrorField::new(500.0, &targets, 31.6);
-    let sim = simulate(&StationLayout::FourLow.stations(500.0, true), &targets, &|p: &Vec3| field.eval(p), LengthUncertainty::SEED004, 5).unwrap();
+    let sim = simulate(
+        &StationLayout::FourLow.stations(500.0, true),
+        &targets,
+        &|p: &Vec3| field.eval(p),
+        LengthUncertainty::SEED004,
+        5,
+    )
+    .unwrap();
     let adj = adjust(&sim.network, &AdjustParams::default()).unwrap();
     let inputs = LinearisedTracker::inputs(&adj);
     let mut g = c.benchmark_group("gum");
@@ -46,12 +80,32 @@ fn benches(c: &mut Criterion) {
         b.iter(|| {
             // includes building the cached sensitivity from the adjustment
             let f = LinearisedTracker::new(&adj, TrackerQuantity::MaxDeviation).unwrap();
-            monte_carlo(&f, &inputs, &McParams { trials: 10_000, coverage: 0.95, seed: 1 }).unwrap()
+            monte_carlo(
+                &f,
+                &inputs,
+                &McParams {
+                    trials: 10_000,
+                    coverage: 0.95,
+                    seed: 1,
+                },
+            )
+            .unwrap()
         })
     });
     g.bench_function("gum_seed004_1e5", |b| {
         let f = LinearisedTracker::new(&adj, TrackerQuantity::MaxDeviation).unwrap();
-        b.iter(|| monte_carlo(&f, &inputs, &McParams { trials: 100_000, coverage: 0.95, seed: 1 }).unwrap())
+        b.iter(|| {
+            monte_carlo(
+                &f,
+                &inputs,
+                &McParams {
+                    trials: 100_000,
+                    coverage: 0.95,
+                    seed: 1,
+                },
+            )
+            .unwrap()
+        })
     });
     g.finish();
 }
