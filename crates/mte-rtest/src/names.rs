@@ -1,0 +1,114 @@
+//! ISO 230-1 names of the constant (location and squareness) errors the R-test identifies, the
+//! IBS/ISO 10791-6 report names (XOB, ZOB, AOB, COB; XOC, YOC, AOC, BOC …), and their slots.
+//!
+//! A name `E<c>0<axis>` means the constant error of component `<c>` (X, Y, Z: translation;
+//! A, B, C: rotation about X, Y, Z) of the body moved by `<axis>`, relative to its parent body,
+//! i.e. the position-error slot of that body (`EX0B` = δx of the B axis line, `EA0Y` = rotation
+//! of the Y axis about X). Slot values are mm and rad.
+
+use crate::error::{Result, RtestError};
+use crate::kin;
+use mte_kinematics::{Component, Machine};
+use serde::{Deserialize, Serialize};
+
+/// A named constant error and its slot.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+pub struct NamedSlot {
+    /// ISO 230-1 name, e.g. "EX0B".
+    pub iso: String,
+    /// IBS / ISO 10791-6 report name for rotary-axis location errors, e.g. "XOB".
+    pub ibs: Option<String>,
+    /// Index into the machine's error vector.
+    pub slot: usize,
+    /// Angular (rad) rather than linear (mm).
+    pub angular: bool,
+}
+
+fn component(c: char) -> Option<(Component, bool)> {
+    Some(match c {
+        'X' => (Component::Dx, false),
+        'Y' => (Component::Dy, false),
+        'Z' => (Component::Dz, false),
+        'A' => (Component::Ex, true),
+        'B' => (Component::Ey, true),
+        'C' => (Component::Ez, true),
+        _ => return None,
+    })
+}
+
+/// Looks up `E<c>0<axis>` on a machine.
+///
+/// # Errors
+/// [`RtestError::UnknownParameter`] for a malformed name, [`RtestError::UnknownAxis`] for an
+/// axis the machine does not have.
+pub fn slot_by_name(m: &Machine, name: &str) -> Result<NamedSlot> {
+    let bad = |msg: &str| RtestError::UnknownParameter {
+        name: name.into(),
+        message: msg.into(),
+    };
+    let chars: Vec<char> = name.chars().collect();
+    if chars.len() < 4 || chars[0] != 'E' || chars[2] != '0' {
+        return Err(bad(
+            "expected an ISO 230-1 constant error name E<X|Y|Z|A|B|C>0<axis>, e.g. EX0B, EA0Y",
+        ));
+    }
+    let (c, angular) = component(chars[1])
+        .ok_or_else(|| bad("second letter must be X, Y, Z (translation) or A, B, C (rotation)"))?;
+    let axis: String = chars[3..].iter().collect();
+    if m.axis_index(&axis).is_none() {
+        return Err(kin::unknown_axis(
+            m,
+            &axis,
+            &format!("in parameter `{name}`"),
+        ));
+    }
+    let slot = kin::position_slot(m, &axis, c)
+        .ok_or_else(|| bad("the machine has no constant error slot for this component"))?;
+    let rotary = kin::axes(m).iter().any(|a| a.name == axis && a.rotary);
+    let ibs = rotary.then(|| format!("{}O{}", chars[1], axis));
+    Ok(NamedSlot {
+        iso: name.into(),
+        ibs,
+        slot,
+        angular,
+    })
+}
+
+/// The four location errors of every rotary axis A, B or C (ISO 230-7): the two translations
+/// across the axis and the two tilts, e.g. EX0B, EZ0B, EA0B, EC0B and EX0C, EY0C, EA0C, EB0C.
+///
+/// # Errors
+/// [`RtestError::UnknownAxis`] for a rotary axis not named A, B or C.
+pub fn location_errors(m: &Machine) -> Result<Vec<NamedSlot>> {
+    let mut out = Vec::new();
+    for a in kin::axes(m).iter().filter(|a| a.rotary) {
+        let names: [&str; 4] = match a.name.as_str() {
+            "A" => ["EY0A", "EZ0A", "EB0A", "EC0A"],
+            "B" => ["EX0B", "EZ0B", "EA0B", "EC0B"],
+            "C" => ["EX0C", "EY0C", "EA0C", "EB0C"],
+            other => {
+                return Err(kin::unknown_axis(
+                    m,
+                    other,
+                    "rotary axes must be named A, B or C to name their location errors",
+                ));
+            }
+        };
+        for n in names {
+            out.push(slot_by_name(m, n)?);
+        }
+    }
+    Ok(out)
+}
+
+/// The three squareness errors of the linear axes X, Y, Z in this crate's convention (X is the
+/// reference, Y squared to it in the XY plane, Z squared to both): EC0Y, EB0Z, EA0Z.
+///
+/// # Errors
+/// [`RtestError::UnknownAxis`] when the machine lacks X, Y or Z.
+pub fn squareness_errors(m: &Machine) -> Result<Vec<NamedSlot>> {
+    ["EC0Y", "EB0Z", "EA0Z"]
+        .iter()
+        .map(|n| slot_by_name(m, n))
+        .collect()
+}
