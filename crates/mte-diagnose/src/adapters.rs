@@ -30,8 +30,12 @@ pub(crate) fn prepare_machine_dataset(
             let machine = load_machine(manifest, dir, manifest_path)?;
             prepare_rtest(manifest, table, &machine, manifest_path)
         }
+        "tracker" => {
+            let machine = load_machine(manifest, dir, manifest_path)?;
+            prepare_tracker(manifest, table, &machine, dir, manifest_path)
+        }
         other => Err(field_error(format!(
-            "field `kind`: `{other}`, expected one of axis, rtest"
+            "field `kind`: `{other}`, expected one of axis, rtest, tracker"
         ))),
     }
 }
@@ -612,4 +616,246 @@ fn identifiable_subset(base: Vec<Term>, obs: &Observations) -> Vec<Term> {
         }
     }
     kept
+}
+
+/// Laser-tracker multilateration data (seed 004): interferometric lengths from several stations
+/// to targets the machine visits. The network is first adjusted as a free network
+/// (`mte-metrology`, datum on the nominal targets) to get the stations and dead paths; then the
+/// lengths themselves are the observations, linearised there: station positions and dead paths
+/// are the base model, and the machine's errors enter through the target positions,
+/// `δℓᵢⱼ = uᵢⱼ·(δPⱼ − δQᵢ) − δdᵢ` with uᵢⱼ the unit vector from station to target. Working on the
+/// lengths keeps their independent noise, so the tests of significance are exact.
+fn prepare_tracker(
+    manifest: &Manifest,
+    lengths: &Table,
+    machine: &Machine,
+    dir: &Path,
+    manifest_path: &Path,
+) -> Result<Prepared> {
+    use mte_metrology::adjust::{AdjustParams, adjust};
+    use mte_metrology::network::{DeadPath, LengthObservation, Network, Station, Target};
+    let missing = |field: &str, what: &str| DiagnoseError::Dataset {
+        path: manifest_path.display().to_string(),
+        detail: format!("field `{field}`: missing ({what})"),
+    };
+    let noise_um = manifest.noise_um.ok_or_else(|| {
+        missing(
+            "noise_um",
+            "the standard uncertainty of one tracker length, µm",
+        )
+    })?;
+    let targets_file = manifest
+        .targets
+        .as_deref()
+        .ok_or_else(|| missing("targets", "the targets table: id and commanded axes"))?;
+    let targets = Table::read(&dir.join(targets_file))?;
+    let axes = read_axes(machine, &targets)?;
+    let id_col = targets.require("id")?;
+    let ids: Vec<String> = (0..targets.len())
+        .map(|r| targets.text(r, id_col).to_string())
+        .collect();
+    let zero = vec![0.0; machine.n_slots()];
+    let q_of = |r: usize| axes.iter().map(|a| a[r]).collect::<Vec<_>>();
+    let nominal: Vec<Vec3> = (0..targets.len())
+        .map(|r| {
+            machine
+                .tool_in_workpiece(&q_of(r), &zero)
+                .translation
+                .vector
+        })
+        .collect();
+    if manifest.setups.len() < 4 {
+        return Err(DiagnoseError::Dataset {
+            path: manifest_path.display().to_string(),
+            detail: format!(
+                "field `setups`: {} stations, a multilateration needs at least 4",
+                manifest.setups.len()
+            ),
+        });
+    }
+    let mut stations = Vec::new();
+    for s in &manifest.setups {
+        let p = s
+            .station_mm
+            .ok_or_else(|| missing("setups[].station_mm", "approximate station position, mm"))?;
+        stations.push(Station {
+            id: s.id.clone(),
+            position_mm: Vec3::new(p[0], p[1], p[2]),
+            dead_path_mm: 0.0,
+            dead_path: DeadPath::Free,
+        });
+    }
+    let (cs, ct, cl) = (
+        lengths.require("station")?,
+        lengths.require("target")?,
+        lengths.require("length_mm")?,
+    );
+    let mut observations = Vec::new();
+    for r in 0..lengths.len() {
+        let station = manifest
+            .setups
+            .iter()
+            .position(|s| s.id == lengths.text(r, cs))
+            .ok_or_else(|| {
+                lengths.error(
+                    r,
+                    format!(
+                        "column `station`: `{}` is not a station of the manifest",
+                        lengths.text(r, cs)
+                    ),
+                )
+            })?;
+        let target = ids
+            .iter()
+            .position(|t| t == lengths.text(r, ct))
+            .ok_or_else(|| {
+                lengths.error(
+                    r,
+                    format!(
+                        "column `target`: `{}` is not in {targets_file}",
+                        lengths.text(r, ct)
+                    ),
+                )
+            })?;
+        observations.push(LengthObservation {
+            station,
+            target,
+            length_mm: lengths.number(r, cl)?,
+            sigma_mm: noise_um * 1e-3,
+        });
+    }
+    let network = Network {
+        stations,
+        targets: ids
+            .iter()
+            .zip(&nominal)
+            .map(|(id, p)| Target {
+                id: id.clone(),
+                nominal_mm: *p,
+            })
+            .collect(),
+        observations,
+    };
+    let adjustment =
+        adjust(&network, &AdjustParams::default()).map_err(|e| DiagnoseError::Dataset {
+            path: lengths.path().into(),
+            detail: format!("network adjustment: {e}"),
+        })?;
+    let n = network.observations.len();
+    let ns = network.stations.len();
+    let station_of: Vec<usize> = network.observations.iter().map(|o| o.station).collect();
+    let target_of: Vec<usize> = network.observations.iter().map(|o| o.target).collect();
+    let q: Vec<Vec3> = adjustment.stations.iter().map(|s| s.position_mm).collect();
+    let d: Vec<f64> = adjustment.stations.iter().map(|s| s.dead_path_mm).collect();
+    let u: Vec<Vec3> = (0..n)
+        .map(|k| (nominal[target_of[k]] - q[station_of[k]]).normalize())
+        .collect();
+    let values = DVec::from_fn(n, |k, _| {
+        network.observations[k].length_mm
+            - ((nominal[target_of[k]] - q[station_of[k]]).norm() - d[station_of[k]])
+    });
+    let mut variables: Vec<Variable> = machine
+        .axes()
+        .iter()
+        .zip(&axes)
+        .map(|(a, v)| Variable {
+            name: a.name.clone(),
+            kind: if a.kind == AxisKind::Rotary {
+                VariableKind::RotaryAxis
+            } else {
+                VariableKind::LinearAxis
+            },
+            values: target_of.iter().map(|&j| v[j]).collect(),
+        })
+        .collect();
+    if let Some(c) = targets.column("t_s") {
+        let t = targets.numbers(c)?;
+        variables.push(Variable {
+            name: "t".into(),
+            kind: VariableKind::Time,
+            values: target_of.iter().map(|&j| t[j]).collect(),
+        });
+    }
+    let observations = Observations {
+        values,
+        sigma: Some(DVec::from_element(n, noise_um * 1e-3)),
+        variables,
+        setup: station_of.clone(),
+        setup_names: network.stations.iter().map(|s| s.id.clone()).collect(),
+        channel: vec![0; n],
+        channel_names: vec!["length".into()],
+        setup_kind: "tracker station".into(),
+    };
+    observations.validate()?;
+    // Base: each station's position and dead path.
+    let mut base = Vec::new();
+    for i in 0..ns {
+        let id = &network.stations[i].id;
+        for k in 0..3 {
+            let letter = component_letter(k);
+            base.push(Term::single(
+                format!("{id} {}", letter.to_ascii_lowercase()),
+                format!("station {id} position in {letter}"),
+                "tracker station coordinate",
+                Family::Base,
+                DVec::from_fn(n, |r, _| if station_of[r] == i { -u[r][k] } else { 0.0 }),
+                Quantity::Length,
+            ));
+        }
+        base.push(Term::single(
+            format!("{id} dead path"),
+            format!("station {id} dead-path length"),
+            "length from the tracker's origin to its interferometer zero",
+            Family::Base,
+            DVec::from_fn(n, |r, _| if station_of[r] == i { -1.0 } else { 0.0 }),
+            Quantity::Length,
+        ));
+    }
+    // Slot sensitivities: the tool tip (reflector) error at each commanded pose, along the line of sight.
+    let mut tip = vec![DMat::zeros(3, machine.n_slots()); nominal.len()];
+    let mut jac = DMat::zeros(6, machine.n_slots());
+    for (r, t) in tip.iter_mut().enumerate() {
+        machine.jacobian_into(&q_of(r), &mut jac);
+        t.copy_from(&jac.rows(0, 3));
+    }
+    let mut s = DMat::zeros(n, machine.n_slots());
+    for k in 0..n {
+        s.row_mut(k)
+            .copy_from(&(u[k].transpose() * &tip[target_of[k]]));
+    }
+    let axes_per_obs: Vec<Vec<f64>> = axes
+        .iter()
+        .map(|v| target_of.iter().map(|&j| v[j]).collect())
+        .collect();
+    let mut effects = slot_effects(machine, &s, &axes_per_obs, &|_| None);
+    // A point measurement sees the tip's position errors along axes that move; constant offsets
+    // of the machine are a rigid shift of all targets, which the stations absorb.
+    effects.retain(|e| {
+        !matches!(
+            e.role,
+            SlotRole::Constant {
+                family: Family::Setup | Family::Location
+            }
+        )
+    });
+    effects.push(SlotEffect {
+        name: "tracker scale".into(),
+        label: "scale error of the tracker's lengths".into(),
+        meaning: "every interferometric length is too long or too short in proportion (wavelength or air-refraction compensation, tracker temperature)".into(),
+        quantity: Quantity::Ratio,
+        role: SlotRole::Constant { family: Family::Instrument },
+        column: DVec::from_fn(n, |k, _| (nominal[target_of[k]] - q[station_of[k]]).norm()),
+        separated_by: Some("a calibrated reference length (scale bar) measured by the tracker, or the machine's own scale checked with a laser interferometer".into()),
+    });
+    let candidates = physical_effects(&observations, &effects, &[]);
+    let title = manifest
+        .description
+        .clone()
+        .unwrap_or_else(|| format!("laser-tracker multilateration on {}", machine.name()));
+    Ok(Prepared {
+        observations,
+        base,
+        candidates,
+        title,
+    })
 }

@@ -39,6 +39,9 @@ pub struct Manifest {
     /// Base model: names of the parameters the user believes in (defaults per kind).
     #[serde(default)]
     pub base_model: Option<Vec<String>>,
+    /// Tracker: the targets table (`id`, commanded axes `<axis>_mm` / `<axis>_deg`, optional `t_s`).
+    #[serde(default)]
+    pub targets: Option<String>,
 }
 
 /// One setup of a dataset.
