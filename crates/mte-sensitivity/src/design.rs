@@ -37,7 +37,10 @@ impl Sampling {
             "mc" | "monte_carlo" => Ok(Sampling::MonteCarlo),
             "lhs" | "latin_hypercube" => Ok(Sampling::LatinHypercube),
             "sobol" | "qmc" => Ok(Sampling::Sobol),
-            o => Err(Error::InvalidParameter { name: "sampling", message: format!("unknown sampling `{o}`; expected mc, lhs or sobol") }),
+            o => Err(Error::InvalidParameter {
+                name: "sampling",
+                message: format!("unknown sampling `{o}`; expected mc, lhs or sobol"),
+            }),
         }
     }
 }
@@ -66,9 +69,19 @@ impl UnitDesign {
     /// [`Error::InvalidParameter`] for `dim` = 0 or too many Sobol' dimensions.
     pub fn new(kind: Sampling, dim: usize, n: usize, seed: u64) -> Result<Self> {
         if dim == 0 {
-            return Err(Error::InvalidParameter { name: "dim", message: "design needs at least one dimension".into() });
+            return Err(Error::InvalidParameter {
+                name: "dim",
+                message: "design needs at least one dimension".into(),
+            });
         }
-        let mut d = UnitDesign { kind, dim, n, seed, perms: vec![], sobol: None };
+        let mut d = UnitDesign {
+            kind,
+            dim,
+            n,
+            seed,
+            perms: vec![],
+            sobol: None,
+        };
         match kind {
             Sampling::MonteCarlo => {}
             Sampling::LatinHypercube => {
@@ -110,19 +123,28 @@ impl UnitDesign {
     /// # Panics
     /// If `first` is not a multiple of [`ROW_BLOCK`], rows exceed `len()`, or `out` has the wrong size.
     pub fn fill(&self, first: usize, n_rows: usize, out: &mut [f64]) {
-        assert_eq!(first % ROW_BLOCK, 0, "first row must be a multiple of ROW_BLOCK");
+        assert_eq!(
+            first % ROW_BLOCK,
+            0,
+            "first row must be a multiple of ROW_BLOCK"
+        );
         assert!(first + n_rows <= self.n, "rows beyond the design");
         assert_eq!(out.len(), n_rows * self.dim);
         let dim = self.dim;
         match self.kind {
-            Sampling::Sobol => self.sobol.as_ref().expect("sobol").fill(first as u64, n_rows, out),
+            Sampling::Sobol => self
+                .sobol
+                .as_ref()
+                .expect("sobol")
+                .fill(first as u64, n_rows, out),
             Sampling::MonteCarlo | Sampling::LatinHypercube => {
                 for (b, chunk) in out.chunks_mut(ROW_BLOCK * dim).enumerate() {
                     let block = (first / ROW_BLOCK + b) as u64;
                     let mut rng = stream(self.seed, block);
                     for v in chunk.iter_mut() {
                         // (0, 1) open: 53 random bits plus half an ulp of the grid
-                        *v = ((rng.random::<u64>() >> 11) as f64 + 0.5) * (1.0 / 9_007_199_254_740_992.0);
+                        *v = ((rng.random::<u64>() >> 11) as f64 + 0.5)
+                            * (1.0 / 9_007_199_254_740_992.0);
                     }
                     if self.kind == Sampling::LatinHypercube {
                         let rows = chunk.len() / dim;
@@ -154,7 +176,9 @@ mod tests {
     #[test]
     fn lhs_has_one_point_per_stratum() {
         let n = 200;
-        let d = UnitDesign::new(Sampling::LatinHypercube, 3, n, 5).unwrap().to_vec();
+        let d = UnitDesign::new(Sampling::LatinHypercube, 3, n, 5)
+            .unwrap()
+            .to_vec();
         for j in 0..3 {
             let mut seen = vec![false; n];
             for r in 0..n {

@@ -7,8 +7,7 @@ use serde::{Deserialize, Serialize};
 use serde_json::Value;
 
 /// Names accepted for `"dist"` in problem files.
-pub const DISTRIBUTION_NAMES: &str =
-    "\"normal\", \"uniform\", \"truncated_normal\", \"tolerance\" (normal with mean 0 from a ± tolerance and its coverage)";
+pub const DISTRIBUTION_NAMES: &str = "\"normal\", \"uniform\", \"truncated_normal\", \"tolerance\" (normal with mean 0 from a ± tolerance and its coverage)";
 
 /// A univariate input distribution.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -98,7 +97,9 @@ impl Distribution {
             return Err(Error::InvalidInput {
                 input: "tolerance".into(),
                 field: "coverage".into(),
-                message: format!("must be a positive number of standard deviations, got {coverage_sigmas}"),
+                message: format!(
+                    "must be a positive number of standard deviations, got {coverage_sigmas}"
+                ),
             });
         }
         Self::normal(0.0, half_width.abs() / coverage_sigmas).map_err(|_| Error::InvalidInput {
@@ -114,7 +115,11 @@ impl Distribution {
     /// [`Error::InvalidInput`] naming the field.
     pub fn validate(&self, input: &str) -> Result<()> {
         let bad = |field: &str, message: String| {
-            Err(Error::InvalidInput { input: input.to_string(), field: field.to_string(), message })
+            Err(Error::InvalidInput {
+                input: input.to_string(),
+                field: field.to_string(),
+                message,
+            })
         };
         match *self {
             Distribution::Normal { mean, sd } => {
@@ -122,7 +127,12 @@ impl Distribution {
                     return bad("mean", format!("must be finite, got {mean}"));
                 }
                 if !(sd.is_finite() && sd > 0.0) {
-                    return bad("sd", format!("standard deviation must be finite and > 0 (zero variance carries no sensitivity), got {sd}"));
+                    return bad(
+                        "sd",
+                        format!(
+                            "standard deviation must be finite and > 0 (zero variance carries no sensitivity), got {sd}"
+                        ),
+                    );
                 }
             }
             Distribution::Uniform { lo, hi } => {
@@ -130,7 +140,12 @@ impl Distribution {
                     return bad("lo/hi", format!("bounds must be finite, got [{lo}, {hi}]"));
                 }
                 if lo >= hi {
-                    return bad("hi", format!("must be greater than lo (zero variance otherwise), got lo = {lo}, hi = {hi}"));
+                    return bad(
+                        "hi",
+                        format!(
+                            "must be greater than lo (zero variance otherwise), got lo = {lo}, hi = {hi}"
+                        ),
+                    );
                 }
             }
             Distribution::TruncatedNormal { mean, sd, lo, hi } => {
@@ -138,14 +153,25 @@ impl Distribution {
                     return bad("mean", format!("must be finite, got {mean}"));
                 }
                 if !(sd.is_finite() && sd > 0.0) {
-                    return bad("sd", format!("standard deviation must be finite and > 0, got {sd}"));
+                    return bad(
+                        "sd",
+                        format!("standard deviation must be finite and > 0, got {sd}"),
+                    );
                 }
                 if lo.is_nan() || hi.is_nan() || lo >= hi {
-                    return bad("hi", format!("must be greater than lo, got lo = {lo}, hi = {hi}"));
+                    return bad(
+                        "hi",
+                        format!("must be greater than lo, got lo = {lo}, hi = {hi}"),
+                    );
                 }
                 let (a, b) = (norm_cdf((lo - mean) / sd), norm_cdf((hi - mean) / sd));
                 if b - a < 1e-14 {
-                    return bad("lo/hi", format!("interval [{lo}, {hi}] carries no probability under N({mean}, {sd}²)"));
+                    return bad(
+                        "lo/hi",
+                        format!(
+                            "interval [{lo}, {hi}] carries no probability under N({mean}, {sd}²)"
+                        ),
+                    );
                 }
             }
         }
@@ -230,13 +256,19 @@ impl Distribution {
         match *self {
             Distribution::Normal { mean, sd } => (x - mean) / sd,
             Distribution::Uniform { lo, hi } => 2.0 * (x - lo) / (hi - lo) - 1.0,
-            Distribution::TruncatedNormal { .. } => norm_ppf(self.cdf(x).clamp(1e-300, 1.0 - 1e-16)),
+            Distribution::TruncatedNormal { .. } => {
+                norm_ppf(self.cdf(x).clamp(1e-300, 1.0 - 1e-16))
+            }
         }
     }
 }
 
 fn pdf_or0(z: f64) -> f64 {
-    if z.is_finite() { crate::special::norm_pdf(z) } else { 0.0 }
+    if z.is_finite() {
+        crate::special::norm_pdf(z)
+    } else {
+        0.0
+    }
 }
 
 /// A named model input with its distribution.
@@ -280,7 +312,11 @@ impl Problem {
     /// [`Error::InvalidInput`] for an invalid distribution, [`Error::Dimension`] for no inputs.
     pub fn new(inputs: Vec<Input>) -> Result<Self> {
         if inputs.is_empty() {
-            return Err(Error::Dimension { what: "number of inputs".into(), expected: 1, got: 0 });
+            return Err(Error::Dimension {
+                what: "number of inputs".into(),
+                expected: 1,
+                got: 0,
+            });
         }
         for inp in &inputs {
             inp.dist.validate(&inp.name)?;
@@ -296,7 +332,10 @@ impl Problem {
         let inputs = dists
             .iter()
             .enumerate()
-            .map(|(i, d)| Input { name: format!("x{}", i + 1), dist: *d })
+            .map(|(i, d)| Input {
+                name: format!("x{}", i + 1),
+                dist: *d,
+            })
             .collect();
         Self::new(inputs)
     }
@@ -308,11 +347,20 @@ impl Problem {
     pub fn with_correlation(mut self, corr: &[f64]) -> Result<Self> {
         let k = self.inputs.len();
         if corr.len() != k * k {
-            return Err(Error::Dimension { what: "correlation matrix entries (k×k)".into(), expected: k * k, got: corr.len() });
+            return Err(Error::Dimension {
+                what: "correlation matrix entries (k×k)".into(),
+                expected: k * k,
+                got: corr.len(),
+            });
         }
         for i in 0..k {
             if (corr[i * k + i] - 1.0).abs() > 1e-12 {
-                return Err(Error::Correlation(format!("diagonal entry ({0},{0}) for `{1}` is {2}, expected 1", i, self.inputs[i].name, corr[i * k + i])));
+                return Err(Error::Correlation(format!(
+                    "diagonal entry ({0},{0}) for `{1}` is {2}, expected 1",
+                    i,
+                    self.inputs[i].name,
+                    corr[i * k + i]
+                )));
             }
             for j in 0..i {
                 let (a, b) = (corr[i * k + j], corr[j * k + i]);
@@ -461,10 +509,13 @@ impl Problem {
     /// [`Error::Json`] / [`Error::UnknownDistribution`] / [`Error::InvalidInput`] naming the
     /// input (by name and index) and field.
     pub fn from_json(v: &Value) -> Result<Self> {
-        let arr = v.get("inputs").and_then(Value::as_array).ok_or_else(|| Error::Json {
-            context: "problem".into(),
-            message: "field `inputs` must be an array of inputs".into(),
-        })?;
+        let arr = v
+            .get("inputs")
+            .and_then(Value::as_array)
+            .ok_or_else(|| Error::Json {
+                context: "problem".into(),
+                message: "field `inputs` must be an array of inputs".into(),
+            })?;
         let mut inputs = Vec::with_capacity(arr.len());
         for (i, iv) in arr.iter().enumerate() {
             inputs.push(input_from_json(iv, i)?);
@@ -479,14 +530,21 @@ impl Problem {
                     message: format!("must be a {k}×{k} array of arrays"),
                 })?;
                 if rows.len() != k {
-                    return Err(Error::Dimension { what: "correlation: number of rows".into(), expected: k, got: rows.len() });
+                    return Err(Error::Dimension {
+                        what: "correlation: number of rows".into(),
+                        expected: k,
+                        got: rows.len(),
+                    });
                 }
                 let mut m = Vec::with_capacity(k * k);
                 for (r, row) in rows.iter().enumerate() {
-                    let row = row.as_array().filter(|a| a.len() == k).ok_or_else(|| Error::Json {
-                        context: format!("correlation[{r}]"),
-                        message: format!("must be an array of {k} numbers"),
-                    })?;
+                    let row =
+                        row.as_array()
+                            .filter(|a| a.len() == k)
+                            .ok_or_else(|| Error::Json {
+                                context: format!("correlation[{r}]"),
+                                message: format!("must be an array of {k} numbers"),
+                            })?;
                     for (c, x) in row.iter().enumerate() {
                         m.push(x.as_f64().ok_or_else(|| Error::Json {
                             context: format!("correlation[{r}][{c}]"),
@@ -501,23 +559,38 @@ impl Problem {
 }
 
 fn input_from_json(v: &Value, index: usize) -> Result<Input> {
-    let name = v.get("name").and_then(Value::as_str).map(str::to_string).unwrap_or_else(|| format!("x{}", index + 1));
+    let name = v
+        .get("name")
+        .and_then(Value::as_str)
+        .map(str::to_string)
+        .unwrap_or_else(|| format!("x{}", index + 1));
     let label = format!("{name} (inputs[{index}])");
     let num = |field: &str| -> Result<f64> {
-        v.get(field).and_then(Value::as_f64).ok_or_else(|| Error::InvalidInput {
-            input: label.clone(),
-            field: field.to_string(),
-            message: "missing or not a number".into(),
-        })
+        v.get(field)
+            .and_then(Value::as_f64)
+            .ok_or_else(|| Error::InvalidInput {
+                input: label.clone(),
+                field: field.to_string(),
+                message: "missing or not a number".into(),
+            })
     };
-    let dname = v.get("dist").and_then(Value::as_str).ok_or_else(|| Error::InvalidInput {
-        input: label.clone(),
-        field: "dist".into(),
-        message: format!("missing; expected one of {DISTRIBUTION_NAMES}"),
-    })?;
+    let dname = v
+        .get("dist")
+        .and_then(Value::as_str)
+        .ok_or_else(|| Error::InvalidInput {
+            input: label.clone(),
+            field: "dist".into(),
+            message: format!("missing; expected one of {DISTRIBUTION_NAMES}"),
+        })?;
     let dist = match dname {
-        "normal" | "gaussian" => Distribution::Normal { mean: v.get("mean").and_then(Value::as_f64).unwrap_or(0.0), sd: num("sd")? },
-        "uniform" => Distribution::Uniform { lo: num("lo")?, hi: num("hi")? },
+        "normal" | "gaussian" => Distribution::Normal {
+            mean: v.get("mean").and_then(Value::as_f64).unwrap_or(0.0),
+            sd: num("sd")?,
+        },
+        "uniform" => Distribution::Uniform {
+            lo: num("lo")?,
+            hi: num("hi")?,
+        },
         "truncated_normal" => Distribution::TruncatedNormal {
             mean: v.get("mean").and_then(Value::as_f64).unwrap_or(0.0),
             sd: num("sd")?,
@@ -528,12 +601,23 @@ fn input_from_json(v: &Value, index: usize) -> Result<Input> {
             let hw = num("half_width")?;
             let cov = v.get("coverage").and_then(Value::as_f64).unwrap_or(3.0);
             if !(cov.is_finite() && cov > 0.0) {
-                return Err(Error::InvalidInput { input: label, field: "coverage".into(), message: format!("must be > 0 standard deviations, got {cov}") });
+                return Err(Error::InvalidInput {
+                    input: label,
+                    field: "coverage".into(),
+                    message: format!("must be > 0 standard deviations, got {cov}"),
+                });
             }
-            Distribution::Normal { mean: v.get("mean").and_then(Value::as_f64).unwrap_or(0.0), sd: hw.abs() / cov }
+            Distribution::Normal {
+                mean: v.get("mean").and_then(Value::as_f64).unwrap_or(0.0),
+                sd: hw.abs() / cov,
+            }
         }
         other => {
-            return Err(Error::UnknownDistribution { input: label, name: other.to_string(), expected: DISTRIBUTION_NAMES });
+            return Err(Error::UnknownDistribution {
+                input: label,
+                name: other.to_string(),
+                expected: DISTRIBUTION_NAMES,
+            });
         }
     };
     dist.validate(&label)?;
@@ -569,13 +653,23 @@ mod tests {
             {"name": "b", "dist": "weibull", "k": 2}]});
         let e = Problem::from_json(&v).unwrap_err();
         assert!(matches!(e, Error::UnknownDistribution { .. }));
-        assert!(e.to_string().contains("b (inputs[1])") && e.to_string().contains("weibull"), "{e}");
-        let v: Value = serde_json::json!({"inputs": [{"name": "a", "dist": "uniform", "lo": 1, "hi": 1}]});
+        assert!(
+            e.to_string().contains("b (inputs[1])") && e.to_string().contains("weibull"),
+            "{e}"
+        );
+        let v: Value =
+            serde_json::json!({"inputs": [{"name": "a", "dist": "uniform", "lo": 1, "hi": 1}]});
         let e = Problem::from_json(&v).unwrap_err();
-        assert!(e.to_string().contains("a (inputs[0])") && e.to_string().contains("hi"), "{e}");
+        assert!(
+            e.to_string().contains("a (inputs[0])") && e.to_string().contains("hi"),
+            "{e}"
+        );
         let v: Value = serde_json::json!({"inputs": [{"name": "a", "dist": "normal", "sd": 1},
             {"name": "b", "dist": "normal", "sd": 1}], "correlation": [[1, 1.5], [1.5, 1]]});
-        assert!(matches!(Problem::from_json(&v).unwrap_err(), Error::Correlation(_)));
+        assert!(matches!(
+            Problem::from_json(&v).unwrap_err(),
+            Error::Correlation(_)
+        ));
     }
 
     #[test]
@@ -587,14 +681,20 @@ mod tests {
 
     #[test]
     fn copula_roundtrip() {
-        let p = Problem::from_dists(&[Distribution::normal(1.0, 2.0).unwrap(), Distribution::uniform(0.0, 1.0).unwrap()])
-            .unwrap()
-            .with_correlation(&[1.0, 0.5, 0.5, 1.0])
-            .unwrap();
+        let p = Problem::from_dists(&[
+            Distribution::normal(1.0, 2.0).unwrap(),
+            Distribution::uniform(0.0, 1.0).unwrap(),
+        ])
+        .unwrap()
+        .with_correlation(&[1.0, 0.5, 0.5, 1.0])
+        .unwrap();
         let mut x = [0.3, -0.7];
         let z = x;
         p.transform_germ(&mut x);
         p.to_germ(&mut x);
-        assert!((x[0] - z[0]).abs() < 1e-9 && (x[1] - z[1]).abs() < 1e-9, "{x:?}");
+        assert!(
+            (x[0] - z[0]).abs() < 1e-9 && (x[1] - z[1]).abs() < 1e-9,
+            "{x:?}"
+        );
     }
 }

@@ -12,3 +12,6 @@ pub use dist::{Distribution, Germ, Input, Problem};
 pub use error::{Error, Result};
 pub use model::{Model, MultiOutput, testfn};
 pub use qmc::SobolSequence;
+pub mod sobol;
+pub mod stats;
+pub use stats::{NoProgress, Progress};

@@ -71,13 +71,23 @@ impl<F: Fn(&[f64], &mut [f64]) + Sync> Model for MultiOutput<F> {
 }
 
 /// Evaluates a batch and checks every output is finite.
-pub(crate) fn eval_checked<M: Model + ?Sized>(model: &M, n_rows: usize, k: usize, xs: &[f64], ys: &mut [f64]) -> Result<()> {
+pub(crate) fn eval_checked<M: Model + ?Sized>(
+    model: &M,
+    n_rows: usize,
+    k: usize,
+    xs: &[f64],
+    ys: &mut [f64],
+) -> Result<()> {
     let m = model.n_outputs();
     ys.iter_mut().for_each(|v| *v = f64::NAN);
     model.evaluate_batch(n_rows, xs, ys);
     if let Some(pos) = ys.iter().position(|v| !v.is_finite()) {
         let row = pos / m;
-        return Err(Error::ModelOutput { output: pos % m, value: ys[pos], x: xs[row * k..(row + 1) * k].to_vec() });
+        return Err(Error::ModelOutput {
+            output: pos % m,
+            value: ys[pos],
+            x: xs[row * k..(row + 1) * k].to_vec(),
+        });
     }
     Ok(())
 }
@@ -146,14 +156,25 @@ pub mod testfn {
         }
         /// k U(0, 1) inputs.
         pub fn problem(&self) -> Problem {
-            Problem::from_dists(&vec![Distribution::Uniform { lo: 0.0, hi: 1.0 }; self.a.len()]).expect("valid")
+            Problem::from_dists(&vec![
+                Distribution::Uniform { lo: 0.0, hi: 1.0 };
+                self.a.len()
+            ])
+            .expect("valid")
         }
         /// Analytic (S1, ST): Vᵢ = 1/(3(1 + aᵢ)²), V = Π(1 + Vᵢ) − 1, ST_i = Vᵢ Π_{j≠i}(1 + Vⱼ)/V.
         pub fn analytic(&self) -> (Vec<f64>, Vec<f64>) {
-            let vi: Vec<f64> = self.a.iter().map(|a| 1.0 / (3.0 * (1.0 + a) * (1.0 + a))).collect();
+            let vi: Vec<f64> = self
+                .a
+                .iter()
+                .map(|a| 1.0 / (3.0 * (1.0 + a) * (1.0 + a)))
+                .collect();
             let prod: f64 = vi.iter().map(|v| 1.0 + v).product();
             let v = prod - 1.0;
-            (vi.iter().map(|x| x / v).collect(), vi.iter().map(|x| x * prod / (1.0 + x) / v).collect())
+            (
+                vi.iter().map(|x| x / v).collect(),
+                vi.iter().map(|x| x * prod / (1.0 + x) / v).collect(),
+            )
         }
         /// The coefficients aᵢ.
         pub fn a(&self) -> &[f64] {
@@ -185,7 +206,11 @@ pub mod testfn {
         }
         /// Analytic indices for independent inputs: Sᵢ = STᵢ = aᵢ²σᵢ² / Σ aⱼ²σⱼ² (first output).
         pub fn analytic(&self, problem: &Problem) -> Vec<f64> {
-            let w: Vec<f64> = self.coef[0].iter().zip(problem.inputs()).map(|(a, i)| (a * i.dist.sd()).powi(2)).collect();
+            let w: Vec<f64> = self.coef[0]
+                .iter()
+                .zip(problem.inputs())
+                .map(|(a, i)| (a * i.dist.sd()).powi(2))
+                .collect();
             let s: f64 = w.iter().sum();
             w.iter().map(|x| x / s).collect()
         }

@@ -181,9 +181,16 @@ impl SobolSequence {
     /// [`Error::InvalidParameter`] if `dim` is 0 or above [`MAX_DIM`].
     pub fn new(dim: usize) -> Result<Self> {
         if dim == 0 || dim > MAX_DIM {
-            return Err(Error::InvalidParameter { name: "dim", message: format!("Sobol' sequence supports 1…{MAX_DIM} dimensions, got {dim}") });
+            return Err(Error::InvalidParameter {
+                name: "dim",
+                message: format!("Sobol' sequence supports 1…{MAX_DIM} dimensions, got {dim}"),
+            });
         }
-        Ok(SobolSequence { dim, v: direction_numbers(dim), shift: vec![0; dim] })
+        Ok(SobolSequence {
+            dim,
+            v: direction_numbers(dim),
+            shift: vec![0; dim],
+        })
     }
 
     /// Scrambled sequence: Matoušek's random linear matrix scramble (a random lower-triangular
@@ -240,7 +247,10 @@ impl SobolSequence {
     /// If `out.len() != n_rows * dim` or the index exceeds 2³².
     pub fn fill(&self, start: u64, n_rows: usize, out: &mut [f64]) {
         assert_eq!(out.len(), n_rows * self.dim, "output buffer size");
-        assert!(start + n_rows as u64 <= 1u64 << 32, "Sobol' index beyond 2^32");
+        assert!(
+            start + n_rows as u64 <= 1u64 << 32,
+            "Sobol' index beyond 2^32"
+        );
         if n_rows == 0 {
             return;
         }
@@ -278,7 +288,18 @@ mod tests {
         }
         // number of primitive polynomials of degree s is φ(2^s − 1)/s: 1,1,2,2,6,6,18,16,48,60
         let all = primitive_polynomials(160);
-        for (s, cnt) in [(1, 1), (2, 1), (3, 2), (4, 2), (5, 6), (6, 6), (7, 18), (8, 16), (9, 48), (10, 60)] {
+        for (s, cnt) in [
+            (1, 1),
+            (2, 1),
+            (3, 2),
+            (4, 2),
+            (5, 6),
+            (6, 6),
+            (7, 18),
+            (8, 16),
+            (9, 48),
+            (10, 60),
+        ] {
             assert_eq!(all.iter().filter(|p| p.0 == s).count(), cnt, "degree {s}");
         }
     }
@@ -299,7 +320,10 @@ mod tests {
     /// point per interval [j/2^m, (j+1)/2^m); scrambling preserves this.
     #[test]
     fn each_dimension_is_a_net() {
-        for seq in [SobolSequence::new(90).unwrap(), SobolSequence::scrambled(90, 7).unwrap()] {
+        for seq in [
+            SobolSequence::new(90).unwrap(),
+            SobolSequence::scrambled(90, 7).unwrap(),
+        ] {
             let m = 10;
             let n = 1usize << m;
             let mut pts = vec![0.0; n * 90];
@@ -335,7 +359,10 @@ mod tests {
                         let b = (pts[r * dim + j] * boxes as f64) as usize;
                         cnt[a * boxes + b] += 1;
                     }
-                    assert!(cnt.iter().all(|&c| c == n / (boxes * boxes)), "dims {i},{j}: {cnt:?}");
+                    assert!(
+                        cnt.iter().all(|&c| c == n / (boxes * boxes)),
+                        "dims {i},{j}: {cnt:?}"
+                    );
                 }
             }
         }

@@ -14,7 +14,11 @@ pub fn erf(x: f64) -> f64 {
         return f64::NAN;
     }
     let a = x.abs();
-    let v = if a < 2.5 { erf_series(a) } else { 1.0 - erfc_cf(a) };
+    let v = if a < 2.5 {
+        erf_series(a)
+    } else {
+        1.0 - erfc_cf(a)
+    };
     v.copysign(x)
 }
 
@@ -30,7 +34,11 @@ pub fn erfc(x: f64) -> f64 {
     if x < 0.0 {
         return 2.0 - erfc(-x);
     }
-    if x < 2.0 { 1.0 - erf_series(x) } else { erfc_cf(x) }
+    if x < 2.0 {
+        1.0 - erf_series(x)
+    } else {
+        erfc_cf(x)
+    }
 }
 
 /// erf(x) = 2/√π · e^{−x²} · Σ 2ⁿ x^{2n+1} / (1·3·…·(2n+1)), all terms positive (x ≥ 0).
