@@ -26,16 +26,12 @@ pub(crate) fn prepare_machine_dataset(
         detail,
     };
     match kind {
-        "rtest" => {
-            let machine = load_machine(manifest, dir, manifest_path)?;
-            prepare_rtest(manifest, table, &machine, manifest_path)
-        }
         "tracker" => {
             let machine = load_machine(manifest, dir, manifest_path)?;
             prepare_tracker(manifest, table, &machine, dir, manifest_path)
         }
         other => Err(field_error(format!(
-            "field `kind`: `{other}`, expected one of axis, rtest, tracker"
+            "field `kind`: `{other}`, expected axis or tracker (R-test data use the mte-rtest/1 manifest)"
         ))),
     }
 }
@@ -209,61 +205,14 @@ fn squareness_effect(
         },
         column: DVec::from_fn(column.len(), |i, _| sign * column[i] * coordinate[i]),
         separated_by: None,
+        reference: None,
     })
 }
 
-/// The body that follows `body` on its kinematic branch (towards the tool or the workpiece).
-fn child_on_branch(machine: &Machine, body: usize) -> Option<usize> {
-    [machine.tool_chain(), machine.workpiece_chain()]
-        .into_iter()
-        .find_map(|chain| {
-            chain
-                .iter()
-                .position(|&b| b == body)
-                .and_then(|k| chain.get(k + 1).copied())
-        })
-}
-
-/// Column of a location error of a rotary axis as ISO 230-7 and the R-test see it: the axis
-/// turns about a displaced or tilted line while the parts it carries were set up at home, so
-/// the motion is `E · S(q) · E⁻¹` (E the error transform), not `E · S(q)`. To first order that is
-/// the axis' own position slot with twist e plus the next body's position slot with the twist
-/// `−(v − t × ω, ω)`, t the next body's offset (home frames are parallel, so the offset is a pure
-/// translation and the adjoint reduces to this).
-fn rotary_location_column(
-    machine: &Machine,
-    s: &DMat,
-    body: usize,
-    component: usize,
-) -> Option<DVec> {
-    let child = child_on_branch(machine, body)?;
-    let slot = |b: usize, k: usize| {
-        machine
-            .error_slots()
-            .iter()
-            .position(|e| e.body == b && e.kind == SlotKind::Position && e.component.index() == k)
-    };
-    let own = slot(body, component)?;
-    let t = machine.body_home_mm(child) - machine.body_home_mm(body);
-    let (mut v, mut w) = (Vec3::zeros(), Vec3::zeros());
-    if component < 3 {
-        v[component] = 1.0
-    } else {
-        w[component - 3] = 1.0
-    }
-    let v_child = -(v - t.cross(&w));
-    let mut col = s.column(own).into_owned();
-    for k in 0..6 {
-        let coef = if k < 3 { v_child[k] } else { -w[k - 3] };
-        if coef != 0.0 {
-            col += s.column(slot(child, k)?) * coef;
-        }
-    }
-    Some(col)
-}
-
 /// Builds the named slot effects of a machine from the per-observation sensitivities `s`
-/// (n × n_slots), the axis values per observation, and hints on what separates them.
+/// (n × n_slots), the axis values per observation, and hints on what separates them. With a
+/// `reference` (sensitivities to the slots' values at each observation's reference pose, and
+/// the axis values there), an error acts at both poses.
 ///
 /// Position slots of linear axes are left out: their translations are constant offsets (setup
 /// errors say the same) and their rotations turn the whole branch downstream, which the
@@ -272,8 +221,10 @@ fn slot_effects(
     machine: &Machine,
     s: &DMat,
     axes: &[Vec<f64>],
+    reference: Option<(&DMat, &[Vec<f64>])>,
     hint: &dyn Fn(&SlotName) -> Option<String>,
 ) -> Vec<SlotEffect> {
+    let reference_matrix = reference;
     let mut out = Vec::new();
     for j in 0..machine.n_slots() {
         let slot = machine.error_slots()[j];
@@ -281,15 +232,16 @@ fn slot_effects(
         let axis = machine.slot_axis(j);
         let column = match (axis.map(|a| a.kind), slot.kind) {
             (Some(AxisKind::Linear), SlotKind::Position) => continue,
-            (Some(AxisKind::Rotary), SlotKind::Position) => {
-                match rotary_location_column(machine, s, slot.body, c) {
-                    Some(col) => col,
-                    None => continue,
-                }
-            }
             _ => s.column(j).into_owned(),
         };
-        if column.amax() < 1e-12 {
+        let axis_k = axis.and_then(|a| machine.axis_index(&a.name));
+        let reference = reference.map(|(r, ref_axes)| {
+            let coordinate = axis_k
+                .map(|k| ref_axes[k].clone())
+                .unwrap_or_else(|| vec![0.0; column.len()]);
+            (r.column(j).into_owned(), coordinate)
+        });
+        if column.amax() < 1e-12 && reference.as_ref().is_none_or(|(r, _)| r.amax() < 1e-12) {
             continue;
         }
         let name = slot_name(machine, j);
@@ -298,13 +250,51 @@ fn slot_effects(
                 if let (Some(k), Some(own)) =
                     (machine.axis_index(&axis.name), axis_component(machine, j))
                 {
-                    if let Some(sq) = squareness_effect(&name, &column, &axes[k], c, own) {
-                        let hint = hint(&name);
-                        out.push(SlotEffect {
-                            separated_by: hint,
-                            ..sq
-                        });
+                    if let Some(mut sq) = squareness_effect(&name, &column, &axes[k], c, own) {
+                        // A squareness is a constant: its effect at the reference pose adds in.
+                        if let Some((r, coordinate)) = &reference {
+                            if let Some(at_ref) = squareness_effect(&name, r, coordinate, c, own) {
+                                sq.column += at_ref.column;
+                            }
+                        }
+                        sq.separated_by = hint(&name);
+                        out.push(sq);
                     }
+                }
+            }
+        }
+        if let (Some(axis), SlotKind::Position) = (axis, slot.kind) {
+            if let Some(child) =
+                rotary_child(machine, slot.body).filter(|_| axis.kind == AxisKind::Rotary)
+            {
+                let col = absolute_location_column(machine, s, slot.body, child, c);
+                let reference = reference.as_ref().and_then(|(_, coordinate)| {
+                    let (r, _) = reference_matrix?;
+                    absolute_location_column(machine, r, slot.body, child, c)
+                        .map(|r| (r, coordinate.clone()))
+                });
+                if let Some(col) = col.filter(|c| c.amax() > 1e-12) {
+                    let carried = &machine.bodies()[child].name;
+                    out.push(SlotEffect {
+                        name: format!("{} abs", name.name),
+                        label: format!(
+                            "{} with the {carried} axis kept in place (absolute)",
+                            name.label
+                        ),
+                        meaning: format!(
+                            "{}; the {carried} axis it carries keeps its own place and direction",
+                            name.meaning
+                        ),
+                        quantity: if c < 3 {
+                            Quantity::Length
+                        } else {
+                            Quantity::Angle
+                        },
+                        role: name.role.clone(),
+                        column: col,
+                        separated_by: hint(&name),
+                        reference,
+                    });
                 }
             }
         }
@@ -320,9 +310,60 @@ fn slot_effects(
             },
             role: name.role,
             column,
+            reference,
         });
     }
     out
+}
+
+/// The body after `body` on its kinematic branch, when it is moved by a rotary axis.
+fn rotary_child(machine: &Machine, body: usize) -> Option<usize> {
+    let child = [machine.tool_chain(), machine.workpiece_chain()]
+        .into_iter()
+        .find_map(|chain| {
+            chain
+                .iter()
+                .position(|&b| b == body)
+                .and_then(|k| chain.get(k + 1).copied())
+        })?;
+    let k = machine.axes().iter().position(|a| a.body == child)?;
+    (machine.axes()[k].kind == AxisKind::Rotary).then_some(child)
+}
+
+/// A location error of a rotary axis that carries another rotary axis exists in two
+/// representations (ISO 230-7): *relative*, the carried axis moves with it (the slot itself),
+/// and *absolute*, the carried axis keeps its place and direction at home. The absolute one is
+/// the axis' slot with twist e plus the carried body's slot with `−(v − t × ω, ω)` (t the
+/// carried body's offset; home frames are parallel, so the adjoint reduces to this).
+fn absolute_location_column(
+    machine: &Machine,
+    s: &DMat,
+    body: usize,
+    child: usize,
+    component: usize,
+) -> Option<DVec> {
+    let slot = |b: usize, k: usize| {
+        machine
+            .error_slots()
+            .iter()
+            .position(|e| e.body == b && e.kind == SlotKind::Position && e.component.index() == k)
+    };
+    let t = machine.body_home_mm(child) - machine.body_home_mm(body);
+    let (mut v, mut w) = (Vec3::zeros(), Vec3::zeros());
+    if component < 3 {
+        v[component] = 1.0
+    } else {
+        w[component - 3] = 1.0
+    }
+    let v_child = -(v - t.cross(&w));
+    let mut col = s.column(slot(body, component)?).into_owned();
+    for k in 0..6 {
+        let coef = if k < 3 { v_child[k] } else { -w[k - 3] };
+        if coef != 0.0 {
+            col += s.column(slot(child, k)?) * coef;
+        }
+    }
+    Some(col)
 }
 
 /// Reads the commanded axes of a machine from `<axis>_mm` / `<axis>_deg` columns (rad inside).
@@ -344,241 +385,190 @@ fn read_axes(machine: &Machine, table: &Table) -> Result<Vec<Vec<f64>>> {
         .collect()
 }
 
-/// Setup index of each row from the `setup` column, checked against the manifest's setups.
-fn read_setups(manifest: &Manifest, table: &Table) -> Result<Vec<usize>> {
-    let col = table.require("setup")?;
-    (0..table.len())
-        .map(|r| {
-            let id = table.text(r, col);
-            manifest
-                .setups
-                .iter()
-                .position(|s| s.id == id)
-                .ok_or_else(|| {
-                    let known: Vec<&str> = manifest.setups.iter().map(|s| s.id.as_str()).collect();
-                    table.error(
-                        r,
-                        format!(
-                            "column `setup`: `{id}` is not a setup of the manifest ({})",
-                            known.join(", ")
-                        ),
-                    )
-                })
-        })
-        .collect()
-}
-
-/// ISO 10791-6 R-test data: per row the commanded axes, the setup (ball position) and the 3-D
-/// reading `d = p_ball − p_nest` in the spindle (tool) frame, µm.
-///
-/// First-order model: the nest sits at the tool tip, which the controller puts on the nominal
-/// ball centre; an error vector e moves the tip by δp = J_pos(q)·e in the workpiece frame, so the
-/// reading is `−R_wt(q)ᵀ · J_pos(q) · e`, R_wt the nominal tool orientation in the workpiece frame.
-fn prepare_rtest(
-    manifest: &Manifest,
-    table: &Table,
-    machine: &Machine,
-    manifest_path: &Path,
-) -> Result<Prepared> {
-    let rows = table.len();
-    if rows < 8 {
-        return Err(DiagnoseError::Dataset {
-            path: table.path().into(),
-            detail: format!("{rows} rows: an R-test trajectory needs at least 8"),
-        });
+/// An ISO 10791-6 R-test dataset in the `mte-rtest/1` format, observed through mte-rtest's
+/// measurement model: each reading `d = p_ball − p_nest` (machine coordinates), with the ball
+/// centred in the nest at each setup's centring pose, so an error acts through its value at the
+/// reading and at the centring ([`mte_rtest::RowSensitivity`]).
+pub(crate) fn prepare_rtest(manifest_path: &Path, noise_um: Option<f64>) -> Result<Prepared> {
+    use mte_rtest::model::{NuisanceKind, ObservationModel};
+    let path = manifest_path.display().to_string();
+    let dataset_error = |e: mte_rtest::RtestError| DiagnoseError::Dataset {
+        path: path.clone(),
+        detail: e.to_string(),
+    };
+    let text = std::fs::read_to_string(manifest_path).map_err(|e| DiagnoseError::Dataset {
+        path: path.clone(),
+        detail: e.to_string(),
+    })?;
+    let value: serde_json::Value =
+        serde_json::from_str(&text).map_err(|e| DiagnoseError::Dataset {
+            path: path.clone(),
+            detail: e.to_string(),
+        })?;
+    let machine_name = value
+        .get("machine")
+        .and_then(|v| v.as_str())
+        .ok_or_else(|| DiagnoseError::Dataset {
+            path: path.clone(),
+            detail: "field `machine`: missing".into(),
+        })?;
+    let dir = manifest_path.parent().unwrap_or(Path::new("."));
+    let file = dir.join(machine_name);
+    let machine = if file.is_file() {
+        Machine::from_file(&file)
+    } else {
+        Machine::library(machine_name)
     }
-    if manifest.setups.is_empty() {
-        return Err(DiagnoseError::Dataset {
-            path: manifest_path.display().to_string(),
-            detail: "field `setups`: at least one ball position".into(),
-        });
-    }
-    let axes = read_axes(machine, table)?;
-    let setups = read_setups(manifest, table)?;
-    let time = table.column("t_s").map(|c| table.numbers(c)).transpose()?;
-    let readings: Vec<Vec<f64>> = ["dx_um", "dy_um", "dz_um"]
-        .iter()
-        .map(|c| table.numbers(table.require(c)?))
-        .collect::<Result<_>>()?;
+    .map_err(|e| DiagnoseError::Dataset {
+        path: path.clone(),
+        detail: format!("field `machine`: {e}"),
+    })?;
+    let rotary = |name: &str| {
+        machine
+            .axis_index(name)
+            .is_some_and(|k| machine.axes()[k].kind == AxisKind::Rotary)
+    };
+    let data = mte_rtest::io::read_dataset(manifest_path, &rotary).map_err(dataset_error)?;
+    let model = ObservationModel::new(&machine, &data).map_err(dataset_error)?;
+    let sens = model.sensitivity();
+    let rows = data.readings.len();
     let n = 3 * rows;
-    let n_slots = machine.n_slots();
-    let mut s = DMat::zeros(n, n_slots);
-    let mut rotations = Vec::with_capacity(rows);
-    let zero = vec![0.0; n_slots];
-    let mut jac = DMat::zeros(6, n_slots);
-    for r in 0..rows {
-        let q: Vec<f64> = axes.iter().map(|a| a[r]).collect();
-        machine.jacobian_into(&q, &mut jac);
-        let rot = machine
-            .tool_in_workpiece(&q, &zero)
-            .rotation
-            .to_rotation_matrix()
-            .into_inner();
-        let sens = -(rot.transpose() * jac.rows(0, 3));
-        for ch in 0..3 {
-            s.row_mut(3 * r + ch).copy_from(&sens.row(ch));
-        }
-        rotations.push(rot);
-    }
-    let values = DVec::from_fn(n, |i, _| readings[i % 3][i / 3] * 1e-3);
+    let per_obs = |f: &dyn Fn(usize) -> f64| -> Vec<f64> { (0..n).map(|i| f(i / 3)).collect() };
     let mut variables: Vec<Variable> = machine
         .axes()
         .iter()
-        .zip(&axes)
-        .map(|(a, v)| Variable {
+        .enumerate()
+        .map(|(k, a)| Variable {
             name: a.name.clone(),
             kind: if a.kind == AxisKind::Rotary {
                 VariableKind::RotaryAxis
             } else {
                 VariableKind::LinearAxis
             },
-            values: v.iter().flat_map(|x| [*x; 3]).collect(),
+            values: per_obs(&|r| data.readings[r].q[k]),
         })
         .collect();
-    if let Some(t) = &time {
-        variables.push(Variable {
-            name: "t".into(),
-            kind: VariableKind::Time,
-            values: t.iter().flat_map(|x| [*x; 3]).collect(),
-        });
-    }
+    variables.push(Variable {
+        name: "t".into(),
+        kind: VariableKind::Time,
+        values: per_obs(&|r| data.readings[r].t_s),
+    });
     let observations = Observations {
-        values,
-        sigma: manifest.noise_um.map(|u| DVec::from_element(n, u * 1e-3)),
+        values: DVec::from_fn(n, |i, _| data.readings[i / 3].d_mm[i % 3]),
+        sigma: noise_um.map(|u| DVec::from_element(n, u * 1e-3)),
         variables,
-        setup: setups.iter().flat_map(|s| [*s; 3]).collect(),
-        setup_names: manifest.setups.iter().map(|s| s.id.clone()).collect(),
+        setup: (0..n).map(|i| data.readings[i / 3].setup).collect(),
+        setup_names: data.setups.iter().map(|s| s.id.clone()).collect(),
         channel: (0..n).map(|i| i % 3).collect(),
         channel_names: vec!["dx".into(), "dy".into(), "dz".into()],
         setup_kind: "ball position".into(),
     };
     observations.validate()?;
-    let axes_per_obs: Vec<Vec<f64>> = axes
-        .iter()
-        .map(|v| v.iter().flat_map(|x| [*x; 3]).collect())
+    let n_slots = machine.n_slots();
+    let mut at_row = DMat::zeros(n, n_slots);
+    let mut at_ref = DMat::zeros(n, n_slots);
+    for (r, rs) in sens.iter().enumerate() {
+        for ch in 0..3 {
+            at_row.row_mut(3 * r + ch).copy_from(&rs.at_row.row(ch));
+            at_ref
+                .row_mut(3 * r + ch)
+                .copy_from(&rs.at_centring.row(ch));
+        }
+    }
+    let axes_per_obs: Vec<Vec<f64>> = (0..machine.axes().len())
+        .map(|k| per_obs(&|r| data.readings[r].q[k]))
+        .collect();
+    let axes_at_centring: Vec<Vec<f64>> = (0..machine.axes().len())
+        .map(|k| per_obs(&|r| data.setups[data.readings[r].setup].centring_q[k]))
         .collect();
     let hint = |name: &SlotName| {
         match name.role {
-        SlotRole::Constant { family: Family::Location } => Some("a second ball position at another height or distance along the rotary axis (e.g. ball at ±Y on a B axis, or raised in Z)".to_string()),
-        SlotRole::Constant { family: Family::Setup } => Some("a second nest length or ball height".to_string()),
+        SlotRole::Constant { family: Family::Location } => Some(
+            "a second ball position at another height or distance along the rotary axis (e.g. the ball turned to the other side of the table by C, or raised in Z)".to_string(),
+        ),
         _ => None,
     }
     };
-    let effects = slot_effects(machine, &s, &axes_per_obs, &hint);
-
-    // Per-setup reading offsets: the nest's zero in each setup.
+    let effects = slot_effects(
+        &machine,
+        &at_row,
+        &axes_per_obs,
+        Some((&at_ref, &axes_at_centring)),
+        &hint,
+    );
+    // Base: the sensor's zero in each setup, and the positions of the rotary axis lines.
     let mut base: Vec<Term> = Vec::new();
-    for (k, setup) in manifest.setups.iter().enumerate() {
-        for ch in 0..3 {
-            let col = DVec::from_fn(n, |i, _| {
-                if observations.setup[i] == k && i % 3 == ch {
-                    1.0
+    let mut setup_candidates: Vec<Box<dyn crate::Candidate>> = Vec::new();
+    for (k, setup) in data.setups.iter().enumerate() {
+        for (kind, what) in [
+            (NuisanceKind::SensorZero, "sensor zero"),
+            (NuisanceKind::NestOffset, "nest offset"),
+            (NuisanceKind::BallOffset, "ball centring offset"),
+        ] {
+            for a in 0..3 {
+                let col = DVec::from_fn(n, |i, _| {
+                    if data.readings[i / 3].setup == k {
+                        sens[i / 3].nuisance(kind)[(i % 3, a)]
+                    } else {
+                        0.0
+                    }
+                });
+                let axis = ['x', 'y', 'z'][a];
+                let family = if kind == NuisanceKind::SensorZero {
+                    Family::Base
                 } else {
-                    0.0
+                    Family::Setup
+                };
+                let t = Term::single(
+                    format!("{} {what} {axis}", setup.id),
+                    format!("{what} in {axis} (setup {})", setup.id),
+                    format!("the R-test's {what} in this setup"),
+                    family,
+                    col,
+                    Quantity::Length,
+                )
+                .separated_by("a second nest length, or the ball position probed on the table");
+                if kind == NuisanceKind::SensorZero {
+                    base.push(t);
+                } else {
+                    setup_candidates.push(Box::new(t));
                 }
-            });
-            let axis = ['x', 'y', 'z'][ch];
-            base.push(Term::single(
-                format!("{} d{axis} zero", setup.id),
-                format!("zero of the {axis} reading in setup {}", setup.id),
-                "the sensor nest's zero in this setup",
-                Family::Base,
-                col,
-                Quantity::Length,
-            ));
+            }
         }
     }
-    let base_names: Vec<String> = match &manifest.base_model {
-        Some(names) => names.clone(),
-        None => default_rtest_base(machine),
-    };
-    let mut candidates_effects = Vec::new();
+    let base_names = default_rtest_base(&machine);
+    let mut candidate_effects = Vec::new();
     for e in effects {
         if base_names.contains(&e.name) {
+            let col = e
+                .reference
+                .as_ref()
+                .map(|(r, _)| &e.column + r)
+                .unwrap_or_else(|| e.column.clone());
             base.push(
                 Term::single(
                     e.name.clone(),
                     e.label.clone(),
                     e.meaning.clone(),
                     Family::Base,
-                    e.column.clone(),
+                    col,
                     e.quantity,
                 )
                 .separated_by_opt(e.separated_by.clone()),
             );
         } else {
-            candidates_effects.push(e);
+            candidate_effects.push(e);
         }
-    }
-    for name in &base_names {
-        if !base.iter().any(|t| &t.name == name) {
-            return Err(DiagnoseError::Dataset {
-                path: manifest_path.display().to_string(),
-                detail: format!(
-                    "field `base_model`: `{name}` is not an error of {} that these data see",
-                    machine.name()
-                ),
-            });
-        }
-    }
-    // Ball position errors, in the workpiece frame: one set per distinct ball (setups that
-    // state the same ball position share it, as when the table turns one ball to another place).
-    let mut balls: Vec<([f64; 3], Vec<usize>)> = Vec::new();
-    for (k, setup) in manifest.setups.iter().enumerate() {
-        let Some(b) = setup.ball_mm else { continue };
-        match balls.iter_mut().find(|(p, _)| *p == b) {
-            Some((_, members)) => members.push(k),
-            None => balls.push((b, vec![k])),
-        }
-    }
-    for (ball, members) in &balls {
-        let ids: Vec<&str> = members
-            .iter()
-            .map(|&k| manifest.setups[k].id.as_str())
-            .collect();
-        let mut cols = DMat::zeros(n, 3);
-        for r in 0..rows {
-            if !members.contains(&setups[r]) {
-                continue;
-            }
-            let rt = rotations[r].transpose();
-            for ch in 0..3 {
-                for a in 0..3 {
-                    cols[(3 * r + ch, a)] = rt[(ch, a)];
-                }
-            }
-        }
-        let tag = format!("ball ({:.0}, {:.0}, {:.0})", ball[0], ball[1], ball[2]);
-        candidates_effects.extend((0..3).map(|a| SlotEffect {
-            name: format!("{tag} {}", ['X', 'Y', 'Z'][a]),
-            label: format!(
-                "position error in {} of the {tag} (setups {})",
-                ['X', 'Y', 'Z'][a],
-                ids.join(", ")
-            ),
-            meaning: "the precision ball sits off its stated position on the table".into(),
-            quantity: Quantity::Length,
-            role: SlotRole::Constant {
-                family: Family::Setup,
-            },
-            column: cols.column(a).into_owned(),
-            separated_by: Some(
-                "a measurement of the ball position on the table (touch probe)".into(),
-            ),
-        }));
     }
     let base = identifiable_subset(base, &observations);
-    let drifting: Vec<&Term> = base.iter().filter(|t| !t.name.ends_with(" zero")).collect();
-    let mut candidates = physical_effects(&observations, &candidates_effects, &drifting);
-    // The drift of the nest zero is the R-test's own thermal drift.
-    let zeros: Vec<&Term> = base.iter().filter(|t| t.name.ends_with(" zero")).collect();
-    if observations.variable_of_kind(VariableKind::Time).is_some() {
-        candidates.extend(physical_effects(&observations, &[], &zeros));
-    }
-    let title = manifest
-        .description
-        .clone()
-        .unwrap_or_else(|| format!("R-test on {}", machine.name()));
+    let drifting: Vec<&Term> = base.iter().collect();
+    let mut candidates = physical_effects(&observations, &candidate_effects, &drifting);
+    candidates.extend(setup_candidates);
+    let title = if data.note.is_empty() {
+        format!("R-test on {}", machine.name())
+    } else {
+        format!("R-test on {} ({})", machine.name(), data.note)
+    };
     Ok(Prepared {
         observations,
         base,
@@ -827,7 +817,7 @@ fn prepare_tracker(
         .iter()
         .map(|v| target_of.iter().map(|&j| v[j]).collect())
         .collect();
-    let mut effects = slot_effects(machine, &s, &axes_per_obs, &|_| None);
+    let mut effects = slot_effects(machine, &s, &axes_per_obs, None, &|_| None);
     // A point measurement sees the tip's position errors along axes that move; constant offsets
     // of the machine are a rigid shift of all targets, which the stations absorb.
     effects.retain(|e| {
@@ -846,6 +836,7 @@ fn prepare_tracker(
         role: SlotRole::Constant { family: Family::Instrument },
         column: DVec::from_fn(n, |k, _| (nominal[target_of[k]] - q[station_of[k]]).norm()),
         separated_by: Some("a calibrated reference length (scale bar) measured by the tracker, or the machine's own scale checked with a laser interferometer".into()),
+        reference: None,
     });
     let candidates = physical_effects(&observations, &effects, &[]);
     let title = manifest

@@ -81,6 +81,42 @@ pub struct SlotEffect {
     pub column: DVec,
     /// The measurement that would separate it from what it is confounded with, if known.
     pub separated_by: Option<String>,
+    /// For instruments set up at a reference pose (an R-test centred at the start): the
+    /// sensitivity of every observation to the slot's value at its setup's reference pose, and the
+    /// slot's axis coordinate there (one per observation). The effect of an error function g is
+    /// then `column·g(s) + reference column·g(s_ref)`.
+    pub reference: Option<(DVec, Vec<f64>)>,
+}
+
+impl SlotEffect {
+    /// The effect of a constant error.
+    fn constant_column(&self) -> DVec {
+        match &self.reference {
+            Some((r, _)) => &self.column + r,
+            None => self.column.clone(),
+        }
+    }
+
+    /// The effect of the error `g(s)` whose basis functions `basis` evaluates on the axis
+    /// coordinates `s` (one column per basis function); reference poses included.
+    fn modulated(&self, values: &[f64], basis: &dyn Fn(&[f64]) -> DMat) -> DMat {
+        let n = values.len();
+        match &self.reference {
+            None => {
+                let m = basis(values);
+                DMat::from_fn(n, m.ncols(), |i, j| self.column[i] * m[(i, j)])
+            }
+            Some((r, s_ref)) => {
+                // One basis over rows and references together, so a range-normalised basis
+                // (Legendre) is the same function at both.
+                let all: Vec<f64> = values.iter().chain(s_ref.iter()).copied().collect();
+                let m = basis(&all);
+                DMat::from_fn(n, m.ncols(), |i, j| {
+                    self.column[i] * m[(i, j)] + r[i] * m[(n + i, j)]
+                })
+            }
+        }
+    }
 }
 
 /// The library of physical effects on a set of kinematic error slots: missing constants
@@ -133,7 +169,7 @@ pub fn physical_effects(
                     slot.label.clone(),
                     slot.meaning.clone(),
                     family.clone(),
-                    column_matrix(&slot.column),
+                    column_matrix(&slot.constant_column()),
                     slot.quantity,
                 );
                 if let Some(t_values) = times {
@@ -150,10 +186,9 @@ pub fn physical_effects(
                     continue;
                 };
                 let rotary = v.kind == VariableKind::RotaryAxis;
-                let modulate =
-                    |m: &DMat| DMat::from_fn(n, m.ncols(), |i, j| slot.column[i] * m[(i, j)]);
+                let values = v.values.clone();
                 if *positioning && !rotary {
-                    let cols = DMat::from_fn(n, 1, |i, _| slot.column[i] * v.values[i]);
+                    let cols = slot.modulated(&values, &|s| DMat::from_column_slice(s.len(), 1, s));
                     out.push(Box::new(
                         term(
                             " scale",
@@ -173,7 +208,7 @@ pub fn physical_effects(
                     1
                 };
                 for degree in first..=3 {
-                    let cols = modulate(&legendre_columns(&v.values, first..=degree));
+                    let cols = slot.modulated(&values, &|s| legendre_columns(s, first..=degree));
                     out.push(Box::new(
                         term(
                             &format!(" poly{degree}"),
@@ -187,8 +222,7 @@ pub fn physical_effects(
                     ));
                 }
                 if *positioning {
-                    let column = slot.column.clone();
-                    let values = v.values.clone();
+                    let effect = slot.clone();
                     let (name, axis_name, slot_name, quantity) = (
                         slot.name.clone(),
                         axis.clone(),
@@ -197,7 +231,7 @@ pub fn physical_effects(
                     );
                     let separated_by = slot.separated_by.clone();
                     let make = move |p: f64| {
-                        let cols = sin_cos_columns(&values, p);
+                        let cols = effect.modulated(&values, &|s| sin_cos_columns(s, p));
                         Term {
                             name: format!("{name} periodic"),
                             label: format!(
@@ -208,9 +242,7 @@ pub fn physical_effects(
                                 format_period(p, rotary)
                             ),
                             family: Family::Periodic { period: p },
-                            columns: DMat::from_fn(column.len(), 2, |i, j| {
-                                column[i] * cols[(i, j)]
-                            }),
+                            columns: cols,
                             coefficients: vec![
                                 (format!("{name} periodic sin"), quantity),
                                 (format!("{name} periodic cos"), quantity),

@@ -180,19 +180,32 @@ impl Table {
     }
 }
 
-/// Reads a manifest and its table and prepares the diagnosis.
+/// Reads a manifest and its table and prepares the diagnosis: an `mte-dataset/1` manifest
+/// (axis or tracker data) or an `mte-rtest/1` manifest (R-test data). `noise_um` is the stated
+/// standard uncertainty of one observation where the manifest states none (the R-test format
+/// has no such field).
 ///
 /// # Errors
 /// [`DiagnoseError::Dataset`] naming the file, line and field for unreadable or malformed input.
-pub fn load(manifest_path: &Path) -> Result<Prepared> {
+pub fn load_with_noise(manifest_path: &Path, noise_um: Option<f64>) -> Result<Prepared> {
     let text = std::fs::read_to_string(manifest_path).map_err(|e| DiagnoseError::Dataset {
         path: manifest_path.display().to_string(),
         detail: e.to_string(),
     })?;
-    let manifest: Manifest = serde_json::from_str(&text).map_err(|e| DiagnoseError::Dataset {
-        path: manifest_path.display().to_string(),
-        detail: e.to_string(),
-    })?;
+    let format = serde_json::from_str::<serde_json::Value>(&text)
+        .ok()
+        .and_then(|v| v.get("format").and_then(|f| f.as_str()).map(String::from));
+    if format.as_deref() == Some("mte-rtest/1") {
+        return crate::adapters::prepare_rtest(manifest_path, noise_um);
+    }
+    let mut manifest: Manifest =
+        serde_json::from_str(&text).map_err(|e| DiagnoseError::Dataset {
+            path: manifest_path.display().to_string(),
+            detail: e.to_string(),
+        })?;
+    if manifest.noise_um.is_none() {
+        manifest.noise_um = noise_um;
+    }
     if manifest.format != "mte-dataset/1" {
         return Err(DiagnoseError::Dataset {
             path: manifest_path.display().to_string(),
@@ -221,6 +234,14 @@ pub fn load(manifest_path: &Path) -> Result<Prepared> {
             crate::adapters::prepare_machine_dataset(other, &manifest, &table, &dir, manifest_path)
         }
     }
+}
+
+/// [`load_with_noise`] with the noise the dataset states.
+///
+/// # Errors
+/// As [`load_with_noise`].
+pub fn load(manifest_path: &Path) -> Result<Prepared> {
+    load_with_noise(manifest_path, None)
 }
 
 /// Bidirectional positioning runs of one axis (laser interferometer, ISO 230-2 style).
@@ -339,6 +360,7 @@ fn prepare_axis(manifest: &Manifest, table: &Table, manifest_path: &Path) -> Res
         },
         column: DVec::from_element(n, 1.0),
         separated_by: None,
+        reference: None,
     };
     let mut candidates = physical_effects(&observations, std::slice::from_ref(&slot), &[&offset]);
     if let Some(t) = observations.variable_of_kind(VariableKind::Time) {

@@ -386,16 +386,24 @@ pub fn diagnose(
             break;
         };
         let chosen = pool[ci][vi].clone();
-        // Alternatives: shortlisted candidates that explain the same residual direction.
+        // Alternatives: shortlisted candidates that explain the same residual direction about as
+        // well on held-out data (within 2 %).
         let chosen_perp = projector.residual_part(&chosen.columns);
         let mut alternatives = Vec::new();
-        for &(cj, vj, p, _) in scored.iter().take(params.shortlist) {
-            if cj == ci || p >= params.alpha {
+        for score in ranking.iter().filter(|c| c.name != chosen.name) {
+            let Some(r) = score.held_out_rms else {
+                continue;
+            };
+            if r > new_rms * 1.02 {
                 continue;
             }
+            let Some(&(cj, vj, _, _)) = scored.iter().find(|s| pool[s.0][s.1].name == score.name)
+            else {
+                continue;
+            };
             let other = projector.residual_part(&pool[cj][vj].columns);
-            if max_cosine(&chosen_perp, &other) > 0.99 {
-                alternatives.push(pool[cj][vj].name.clone());
+            if max_cosine(&chosen_perp, &other) > 0.99 && !alternatives.contains(&score.name) {
+                alternatives.push(score.name.clone());
             }
         }
         let separated_by = separating_hint(&chosen, &alternatives, &pool);

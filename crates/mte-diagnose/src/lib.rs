@@ -13,7 +13,7 @@ pub mod term;
 
 pub use candidate::{Alternatives, Candidate, SlotEffect, SlotRole, physical_effects};
 pub use data::{Observations, Variable, VariableKind};
-pub use dataset::{Manifest, Prepared, load};
+pub use dataset::{Manifest, Prepared, load, load_with_noise};
 pub use engine::{DiagnoseParams, Diagnosis, Finding, FitQuality, diagnose};
 pub use structure::StructureTest;
 pub use term::{Estimate, Family, Quantity, Summary, Term};
