@@ -15,14 +15,30 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
+    /// Machine definitions: list the bundled machines, show topology and error slots.
+    Machine(cmd::machine::Args),
+    /// Laser-tracker multilateration: adjust, simulate (seed 004), GUM-S1 uncertainty.
+    Tracker(cmd::tracker::Args),
+    /// ISO 230-2 evaluation of bidirectional linear-axis runs.
+    #[command(name = "iso230-2")]
+    Iso230_2(cmd::iso230_2::Args),
     /// Model-discrepancy diagnosis of a measured dataset: what the model gets wrong, the named cause, the gain.
     Diagnose(cmd::diagnose::Args),
+    /// ISO 10791-6 R-test: simulate BK1/BK2/BK4, identify rotary-axis location errors (seed 002).
+    Rtest(cmd::rtest::Args),
+    /// Volumetric error of a machine with an error set over a grid, tool poses or a program.
+    Simulate(cmd::simulate::Args),
 }
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result: Result<(), mte::CliError> = match cli.command {
+        Command::Machine(args) => cmd::machine::run(&args),
+        Command::Tracker(args) => cmd::tracker::run(&args),
+        Command::Iso230_2(args) => cmd::iso230_2::run(&args),
         Command::Diagnose(args) => cmd::diagnose::run(&args),
+        Command::Rtest(args) => cmd::rtest::run(&args),
+        Command::Simulate(args) => cmd::simulate::run(&args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -1,2 +1,7 @@
 //! One module per subcommand.
 pub mod diagnose;
+pub mod iso230_2;
+pub mod machine;
+pub mod rtest;
+pub mod simulate;
+pub mod tracker;
