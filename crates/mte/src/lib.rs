@@ -1,5 +1,8 @@
 #![doc = include_str!("../README.md")]
 
+pub mod plot;
+pub mod report;
+
 /// Everything that can go wrong in a command: the message names the file, line or field.
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
@@ -18,4 +21,20 @@ pub enum CliError {
     /// The command line itself is inconsistent.
     #[error("{0}")]
     Usage(String),
+    /// Writing or reading JSON failed (serialisation or syntax); names the file.
+    #[error("{path}: JSON: {source}")]
+    Json {
+        /// The file.
+        path: std::path::PathBuf,
+        /// What serde_json said (with line and column for syntax errors).
+        source: serde_json::Error,
+    },
+    /// A chart could not be drawn (bad data or a plotting-backend failure).
+    #[error("plot {title:?}: {detail}")]
+    Plot {
+        /// Chart title.
+        title: String,
+        /// What went wrong (e.g. which series holds a non-finite value).
+        detail: String,
+    },
 }
