@@ -1,0 +1,13 @@
+//! Reproduction of seed000 (see `shared/papers/DIGEST.md`): returns the Markdown of
+//! `docs/reproduction/seed000.md` (the paper's values beside ours).
+
+use super::ReproduceError;
+
+/// Generates the Markdown text of `docs/reproduction/seed000.md`.
+///
+/// # Errors
+/// [`ReproduceError::NotImplemented`] until the generator is written;
+/// [`ReproduceError::Failed`] when a computation fails.
+pub fn generate() -> Result<String, ReproduceError> {
+    Err(ReproduceError::NotImplemented("seed000"))
+}
