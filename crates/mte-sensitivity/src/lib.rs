@@ -15,3 +15,4 @@ pub use qmc::SobolSequence;
 pub mod sobol;
 pub mod stats;
 pub use stats::{NoProgress, Progress};
+pub mod pce;
