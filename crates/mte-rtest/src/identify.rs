@@ -293,11 +293,21 @@ pub fn identify(m: &Machine, data: &Dataset, spec: &FitSpec) -> Result<Fit> {
         data.readings.iter().flat_map(|r| r.d_mm.iter().copied()),
     );
     // column scaling
-    let scale: Vec<f64> = (0..p).map(|j| a.column(j).norm()).collect();
+    // columns at round-off level (a parameter the readings do not depend on at all, e.g. a C
+    // location error when C never moves) are zeroed so that scaling cannot inflate them
+    let raw: Vec<f64> = (0..p).map(|j| a.column(j).norm()).collect();
+    let big = raw.iter().copied().fold(0.0, f64::max);
+    let scale: Vec<f64> = raw
+        .iter()
+        .map(|&r| if r > 1e-9 * big { r } else { 0.0 })
+        .collect();
     let mut a_s = a.clone();
     for (j, &sc) in scale.iter().enumerate() {
-        let s = if sc > 0.0 { sc } else { 1.0 };
-        a_s.column_mut(j).scale_mut(1.0 / s);
+        if sc > 0.0 {
+            a_s.column_mut(j).scale_mut(1.0 / sc);
+        } else {
+            a_s.column_mut(j).fill(0.0);
+        }
     }
     let svd = a_s.clone().svd(false, true);
     let v_t = svd

@@ -1,5 +1,6 @@
 #![doc = include_str!("../README.md")]
 
+pub mod compensate;
 pub mod error;
 pub mod identify;
 pub mod io;
@@ -7,7 +8,9 @@ mod kin;
 pub mod model;
 pub mod names;
 pub mod program;
+pub mod reproduce;
 pub mod simulate;
+pub mod thermal;
 
 pub use error::{Result, RtestError};
 pub use identify::{

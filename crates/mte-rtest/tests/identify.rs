@@ -271,3 +271,35 @@ fn bad_input_gives_clear_errors() {
     .unwrap_err();
     assert!(matches!(e, RtestError::OutOfStroke { .. }), "{e}");
 }
+
+/// BK1 alone never turns C: the C location errors get no information (a constant table shift is
+/// absorbed by the centring) and must be reported unobservable, not fitted from round-off.
+#[test]
+fn c_location_errors_are_unobservable_from_bk1_alone() {
+    let m = machine();
+    let plan = [PlanItem {
+        setup: SetupSpec::new("s", Vec3::new(0.0, 177.0, 60.0)),
+        programs: vec![Program::bk1(&m, None).unwrap()],
+    }];
+    let sim = simulate(
+        &m,
+        &plan,
+        &errors(&m, &[("EX0B", 0.004)])[..],
+        &SimOptions::default(),
+    )
+    .unwrap();
+    let fit = identify(&m, &sim.dataset, &FitSpec::pivots(&m).unwrap()).unwrap();
+    for n in ["EX0C", "EY0C"] {
+        let e = fit.get(n).unwrap();
+        assert!(
+            e.std_uncertainty.is_none() && e.value.abs() < 1e-9,
+            "{n}: {e:?}"
+        );
+    }
+    assert!((fit.get("EX0B").unwrap().value - 0.004).abs() < 2e-4);
+    assert!(
+        fit.warnings.iter().any(|w| w.contains("EX0C")),
+        "{:?}",
+        fit.warnings
+    );
+}
