@@ -2,7 +2,7 @@
 
 use std::path::PathBuf;
 
-use mte_diagnose::{DiagnoseParams, Diagnosis, diagnose, load, report};
+use mte_diagnose::{DiagnoseParams, Diagnosis, diagnose, load_with_noise, report};
 use plotters::prelude::*;
 
 use mte::CliError;
@@ -15,6 +15,9 @@ pub struct Args {
     /// Folder for the report (report.md, diagnosis.json, one SVG of residuals per finding).
     #[arg(long, default_value = "out/diagnose")]
     pub out: PathBuf,
+    /// Standard uncertainty of one observation (µm) where the dataset states none (R-test data).
+    #[arg(long)]
+    pub noise_um: Option<f64>,
     /// Family-wise significance level of a discovery.
     #[arg(long, default_value_t = 1e-3)]
     pub alpha: f64,
@@ -22,7 +25,8 @@ pub struct Args {
 
 /// Runs the diagnosis and writes the report.
 pub fn run(args: &Args) -> Result<(), CliError> {
-    let prepared = load(&args.manifest).map_err(|e| CliError::Library(e.to_string()))?;
+    let prepared = load_with_noise(&args.manifest, args.noise_um)
+        .map_err(|e| CliError::Library(e.to_string()))?;
     let params = DiagnoseParams {
         alpha: args.alpha,
         ..DiagnoseParams::default()
