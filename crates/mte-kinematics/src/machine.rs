@@ -1032,7 +1032,12 @@ impl Machine {
         self.with_body_offset(self.workpiece, offset_mm)
     }
 
-    fn with_body_offset(&self, body: usize, offset_mm: Vec3) -> Machine {
+    /// A copy of this machine with another offset of body `body` (relative to its parent at
+    /// home, mm). [`Machine::json`] still returns the original text.
+    ///
+    /// # Panics
+    /// If `body` is out of range.
+    pub fn with_body_offset(&self, body: usize, offset_mm: Vec3) -> Machine {
         let mut bodies = self.bodies.clone();
         bodies[body].offset_mm = offset_mm;
         Machine::build(
