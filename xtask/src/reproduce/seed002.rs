@@ -3,11 +3,12 @@
 
 use super::ReproduceError;
 
+// generator provided by the mte-rtest helper (`mte_rtest::reproduce::seed002_report`)
+
 /// Generates the Markdown text of `docs/reproduction/seed002.md`.
 ///
 /// # Errors
-/// [`ReproduceError::NotImplemented`] until the generator is written;
-/// [`ReproduceError::Failed`] when a computation fails.
+/// [`ReproduceError::Failed`] when a simulation or fit of the generator fails.
 pub fn generate() -> Result<String, ReproduceError> {
-    Err(ReproduceError::NotImplemented("seed002"))
+    mte_rtest::reproduce::seed002_report().map_err(|e| ReproduceError::Failed { paper: "seed002", detail: e.to_string() })
 }
