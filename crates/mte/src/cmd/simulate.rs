@@ -1,0 +1,433 @@
+//! `mte simulate`: volumetric error of a machine with an error set, over a grid, a list of tool
+//! poses or a program; writes `result.json`, `points.csv` and `map.svg`.
+
+use std::fmt::Write;
+use std::path::{Path, PathBuf};
+
+use mte::CliError;
+use mte::plot::{Axis, FieldMap, Series, XyChart, heat_arrow_map};
+use mte::report::{write_json, write_text};
+use mte_errors::volumetric::{
+    Grid, Method, Point, VolumetricResult, poses_from_csv, program_from_csv, simulate,
+};
+use mte_errors::{ErrorSet, Evaluator};
+use mte_kinematics::{AxisKind, Machine};
+
+/// Arguments of `mte simulate`.
+#[derive(clap::Args)]
+pub struct Args {
+    /// A library machine name (`mte machine list`) or an mte-machine/1 JSON file.
+    #[arg(long)]
+    machine: String,
+    /// An mte-errors/1 error-set JSON file.
+    #[arg(long)]
+    errors: PathBuf,
+    /// Grid: comma-separated `AXIS=low:high:count` (mm for linear, deg for rotary axes), e.g.
+    /// `X=0:700:8,Y=-500:0:6,Z=-700:0:3`. Default: every linear axis over its stroke.
+    #[arg(long, conflicts_with_all = ["poses", "program"])]
+    grid: Option<String>,
+    /// Points per linear axis of the default grid.
+    #[arg(long, default_value_t = 8)]
+    n: usize,
+    /// Axes held fixed on the grid: `AXIS=value,…` (mm or deg). Default 0 (clamped to the stroke).
+    #[arg(long)]
+    at: Option<String>,
+    /// CSV of tool poses in the workpiece frame (`x_mm,y_mm,z_mm[,i,j,k]`), converted by inverse kinematics.
+    #[arg(long, conflicts_with = "program")]
+    poses: Option<PathBuf>,
+    /// CSV program of axis commands (`x_mm,…,a_deg,…[,t_s][,dir_x,…]`).
+    #[arg(long)]
+    program: Option<PathBuf>,
+    /// Use the first-order model J(q)·e instead of the exact transforms.
+    #[arg(long)]
+    first_order: bool,
+    /// Output directory.
+    #[arg(long)]
+    out: PathBuf,
+}
+
+fn lib<E: std::fmt::Display>(e: E) -> CliError {
+    CliError::Library(e.to_string())
+}
+
+fn read(p: &Path) -> Result<String, CliError> {
+    std::fs::read_to_string(p).map_err(|source| CliError::Io {
+        path: p.to_path_buf(),
+        source,
+    })
+}
+
+/// A library machine name or an mte-machine/1 file.
+fn load_machine(name_or_file: &str) -> Result<Machine, CliError> {
+    if Machine::library_names().contains(&name_or_file) {
+        Machine::library(name_or_file).map_err(lib)
+    } else if Path::new(name_or_file).exists() {
+        Machine::from_file(Path::new(name_or_file)).map_err(lib)
+    } else {
+        Err(CliError::Usage(format!(
+            "--machine: `{name_or_file}` is neither a library machine ({}) nor an existing file",
+            Machine::library_names().join(", ")
+        )))
+    }
+}
+
+fn to_internal(m: &Machine, axis: usize, v: f64) -> f64 {
+    if m.axes()[axis].kind == AxisKind::Rotary {
+        v.to_radians()
+    } else {
+        v
+    }
+}
+
+fn axis_of(m: &Machine, name: &str, what: &str) -> Result<usize, CliError> {
+    m.axis_index(name).ok_or_else(|| {
+        CliError::Usage(format!(
+            "{what}: unknown axis `{name}` (machine axes: {})",
+            m.axes()
+                .iter()
+                .map(|a| a.name.as_str())
+                .collect::<Vec<_>>()
+                .join(", ")
+        ))
+    })
+}
+
+fn parse_grid(
+    m: &Machine,
+    spec: Option<&str>,
+    at: Option<&str>,
+    n: usize,
+) -> Result<Grid, CliError> {
+    let mut g = Grid::over_strokes(m, n);
+    if let Some(spec) = spec {
+        g.axes.clear();
+        for part in spec.split(',').filter(|s| !s.trim().is_empty()) {
+            let bad = || CliError::Usage(format!("--grid: `{part}` is not AXIS=low:high:count"));
+            let (name, rest) = part.trim().split_once('=').ok_or_else(bad)?;
+            let f: Vec<&str> = rest.split(':').collect();
+            if f.len() != 3 {
+                return Err(bad());
+            }
+            let k = axis_of(m, name.trim(), "--grid")?;
+            let lo: f64 = f[0].trim().parse().map_err(|_| bad())?;
+            let hi: f64 = f[1].trim().parse().map_err(|_| bad())?;
+            let cnt: usize = f[2].trim().parse().map_err(|_| bad())?;
+            g.axes.push((
+                m.axes()[k].name.clone(),
+                to_internal(m, k, lo),
+                to_internal(m, k, hi),
+                cnt,
+            ));
+        }
+        let on_grid: Vec<String> = g.axes.iter().map(|a| a.0.clone()).collect();
+        g.fixed.retain(|(a, _)| !on_grid.contains(a));
+    }
+    if let Some(at) = at {
+        for part in at.split(',').filter(|s| !s.trim().is_empty()) {
+            let (name, v) = part
+                .trim()
+                .split_once('=')
+                .ok_or_else(|| CliError::Usage(format!("--at: `{part}` is not AXIS=value")))?;
+            let k = axis_of(m, name.trim(), "--at")?;
+            let v: f64 = v
+                .trim()
+                .parse()
+                .map_err(|_| CliError::Usage(format!("--at: `{part}`: not a number")))?;
+            g.fixed.retain(|(a, _)| a != &m.axes()[k].name);
+            g.fixed
+                .push((m.axes()[k].name.clone(), to_internal(m, k, v)));
+        }
+    }
+    Ok(g)
+}
+
+/// Run `mte simulate`.
+pub fn run(args: &Args) -> Result<(), CliError> {
+    let m = load_machine(&args.machine)?;
+    let set = ErrorSet::from_file(&args.errors).map_err(lib)?;
+    let ev = Evaluator::new(&m, &set).map_err(lib)?;
+    let (source, points, grid) = if let Some(p) = &args.program {
+        (
+            "program",
+            program_from_csv(&read(p)?, &p.display().to_string(), &m).map_err(lib)?,
+            None,
+        )
+    } else if let Some(p) = &args.poses {
+        (
+            "poses",
+            poses_from_csv(&read(p)?, &p.display().to_string(), &m).map_err(lib)?,
+            None,
+        )
+    } else {
+        let g = parse_grid(&m, args.grid.as_deref(), args.at.as_deref(), args.n)?;
+        ("grid", g.points(&m).map_err(lib)?, Some(g))
+    };
+    if points.is_empty() {
+        return Err(CliError::Usage("no points to simulate".into()));
+    }
+    let method = if args.first_order {
+        Method::FirstOrder
+    } else {
+        Method::Exact
+    };
+    let r = simulate(&ev, &points, method).map_err(lib)?;
+    std::fs::create_dir_all(&args.out).map_err(|source| CliError::Io {
+        path: args.out.clone(),
+        source,
+    })?;
+    write_text(&args.out.join("points.csv"), &points_csv(&m, &points, &r))?;
+    write_json(
+        &args.out.join("result.json"),
+        &result_json(&m, &set, source, method, &points, &r),
+    )?;
+    let svg = match &grid {
+        Some(g) if g.axes.iter().filter(|a| a.3 >= 2).count() >= 2 => grid_map(&m, g, &points, &r)?,
+        _ => path_chart(&r)?,
+    };
+    write_text(&args.out.join("map.svg"), &svg)?;
+    let s = &r.summary;
+    println!(
+        "{}: {} points ({source}), max |position error| {:.2} µm at point {}, RMS {:.2} µm, ranges x/y/z {:.2}/{:.2}/{:.2} µm, max |orientation error| {:.2} µrad",
+        m.name(),
+        s.n_points,
+        s.max_position_mm * 1e3,
+        s.worst_point,
+        s.rms_position_mm * 1e3,
+        s.range_mm[0] * 1e3,
+        s.range_mm[1] * 1e3,
+        s.range_mm[2] * 1e3,
+        s.max_orientation_rad * 1e6
+    );
+    println!(
+        "wrote {}/result.json, points.csv, map.svg",
+        args.out.display()
+    );
+    Ok(())
+}
+
+fn axis_header(m: &Machine) -> Vec<String> {
+    m.axes()
+        .iter()
+        .map(|a| {
+            format!(
+                "{}_{}",
+                a.name.to_lowercase(),
+                if a.kind == AxisKind::Linear {
+                    "mm"
+                } else {
+                    "deg"
+                }
+            )
+        })
+        .collect()
+}
+
+fn axis_values(m: &Machine, q: &[f64]) -> Vec<f64> {
+    q.iter()
+        .zip(m.axes())
+        .map(|(v, a)| {
+            if a.kind == AxisKind::Linear {
+                *v
+            } else {
+                v.to_degrees()
+            }
+        })
+        .collect()
+}
+
+fn points_csv(m: &Machine, pts: &[Point], r: &VolumetricResult) -> String {
+    let mut s = String::new();
+    let mut h = axis_header(m);
+    h.extend(
+        [
+            "t_s", "dx_um", "dy_um", "dz_um", "d_um", "ex_urad", "ey_urad", "ez_urad",
+        ]
+        .map(String::from),
+    );
+    let _ = writeln!(s, "{}", h.join(","));
+    for (k, p) in pts.iter().enumerate() {
+        let mut row: Vec<String> = axis_values(m, &p.q)
+            .iter()
+            .map(|v| format!("{v}"))
+            .collect();
+        row.push(format!("{}", p.time_s));
+        let d = r.position_mm[k];
+        let o = r.orientation_rad[k];
+        for v in d {
+            row.push(format!("{:.6}", v * 1e3));
+        }
+        row.push(format!(
+            "{:.6}",
+            (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt() * 1e3
+        ));
+        for v in o {
+            row.push(format!("{:.6}", v * 1e6));
+        }
+        let _ = writeln!(s, "{}", row.join(","));
+    }
+    s
+}
+
+fn result_json(
+    m: &Machine,
+    set: &ErrorSet,
+    source: &str,
+    method: Method,
+    pts: &[Point],
+    r: &VolumetricResult,
+) -> serde_json::Value {
+    let s = &r.summary;
+    let um = |v: [f64; 3]| v.map(|x| x * 1e3);
+    let worst = &pts[s.worst_point];
+    let mut worst_axes = serde_json::Map::new();
+    for (h, v) in axis_header(m).iter().zip(axis_values(m, &worst.q)) {
+        worst_axes.insert(h.clone(), v.into());
+    }
+    serde_json::json!({
+        "format": "mte-simulate-result/1",
+        "machine": m.name(),
+        "error_set": set.name,
+        "source": source,
+        "method": if method == Method::Exact { "exact" } else { "first_order" },
+        "frame": "workpiece; position = tool tip actual - ideal; orientation = rotation vector of R_actual R_ideal^T",
+        "n_points": s.n_points,
+        "summary": {
+            "max_position_um": s.max_position_mm * 1e3,
+            "rms_position_um": s.rms_position_mm * 1e3,
+            "worst_point": s.worst_point,
+            "worst_point_axes": worst_axes,
+            "min_position_um_xyz": um(s.min_mm),
+            "max_position_um_xyz": um(s.max_mm),
+            "range_position_um_xyz": um(s.range_mm),
+            "max_orientation_urad": s.max_orientation_rad * 1e6,
+            "rms_orientation_urad": s.rms_orientation_rad * 1e6,
+            "range_orientation_urad_xyz": s.range_rad.map(|x| x * 1e6),
+        },
+        "points_csv": "points.csv",
+    })
+}
+
+/// Heat/arrow map over the first two grid axes, in the layer of the other grid axes that
+/// holds the worst point.
+fn grid_map(
+    m: &Machine,
+    g: &Grid,
+    pts: &[Point],
+    r: &VolumetricResult,
+) -> Result<String, CliError> {
+    let dims: Vec<(usize, f64, f64, usize)> = g
+        .axes
+        .iter()
+        .map(|(n, lo, hi, c)| (m.axis_index(n).unwrap_or(0), *lo, *hi, *c))
+        .collect();
+    let plotted: Vec<usize> = (0..dims.len())
+        .filter(|&d| dims[d].3 >= 2)
+        .take(2)
+        .collect();
+    let (pa, pb) = (plotted[0], plotted[1]);
+    // Index of the worst point per grid dimension (first listed axis slowest).
+    let mut strides = vec![1usize; dims.len()];
+    for d in (0..dims.len().saturating_sub(1)).rev() {
+        strides[d] = strides[d + 1] * dims[d + 1].3;
+    }
+    let w = r.summary.worst_point;
+    let base: usize = (0..dims.len())
+        .filter(|d| *d != pa && *d != pb)
+        .map(|d| ((w / strides[d]) % dims[d].3) * strides[d])
+        .sum();
+    let coord = |d: usize, k: usize| {
+        let (ax, lo, hi, n) = dims[d];
+        let v = lo + (hi - lo) * k as f64 / (n - 1) as f64;
+        if m.axes()[ax].kind == AxisKind::Rotary {
+            v.to_degrees()
+        } else {
+            v
+        }
+    };
+    let xs: Vec<f64> = (0..dims[pa].3).map(|k| coord(pa, k)).collect();
+    let ys: Vec<f64> = (0..dims[pb].3).map(|k| coord(pb, k)).collect();
+    let (ia, ib) = (dims[pa].0, dims[pb].0);
+    let mut values = vec![vec![0.0; xs.len()]; ys.len()];
+    let mut arrows = vec![vec![(0.0, 0.0); xs.len()]; ys.len()];
+    for (j, row) in values.iter_mut().enumerate() {
+        for (i, v) in row.iter_mut().enumerate() {
+            let k = base + i * strides[pa] + j * strides[pb];
+            let d = r.position_mm[k];
+            *v = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt() * 1e3;
+            // In-plane components along the plotted axes' directions (linear axes: x, y, z).
+            let comp = |ax: usize| {
+                let dir = m.axes()[ax].direction;
+                (d[0] * dir.x + d[1] * dir.y + d[2] * dir.z) * 1e3
+            };
+            arrows[j][i] = (comp(ia), comp(ib));
+        }
+    }
+    let unit = |ax: usize| {
+        if m.axes()[ax].kind == AxisKind::Linear {
+            "mm"
+        } else {
+            "deg"
+        }
+    };
+    let layer: Vec<String> = (0..dims.len())
+        .filter(|d| *d != pa && *d != pb)
+        .map(|d| {
+            format!(
+                "{} = {:.4}",
+                m.axes()[dims[d].0].name,
+                axis_values(m, &pts[base].q)[dims[d].0]
+            )
+        })
+        .chain(g.fixed.iter().map(|(n, v)| {
+            let k = m.axis_index(n).unwrap_or(0);
+            format!(
+                "{n} = {:.4}",
+                if m.axes()[k].kind == AxisKind::Rotary {
+                    v.to_degrees()
+                } else {
+                    *v
+                }
+            )
+        }))
+        .collect();
+    let title = format!(
+        "{}: |position error| (µm), {}",
+        m.name(),
+        if layer.is_empty() {
+            "all points".into()
+        } else {
+            layer.join(", ")
+        }
+    );
+    let map = FieldMap {
+        xs,
+        ys,
+        values,
+        arrows: Some(arrows),
+        unit: "µm".into(),
+    };
+    heat_arrow_map(
+        &title,
+        &Axis::new(&m.axes()[ia].name, unit(ia)),
+        &Axis::new(&m.axes()[ib].name, unit(ib)),
+        &map,
+    )
+}
+
+/// Position error components along the point sequence (programs, pose lists, 1-D grids).
+fn path_chart(r: &VolumetricResult) -> Result<String, CliError> {
+    let series = |c: usize| {
+        r.position_mm
+            .iter()
+            .enumerate()
+            .map(|(k, d)| (k as f64, d[c] * 1e3))
+            .collect::<Vec<_>>()
+    };
+    XyChart::new("Position error along the points")
+        .x_axis(Axis::new("point", ""))
+        .y_axis(Axis::new("position error", "µm"))
+        .series(Series::line_markers("δx", series(0)))
+        .series(Series::line_markers("δy", series(1)))
+        .series(Series::line_markers("δz", series(2)))
+        .render()
+}
