@@ -1,4 +1,5 @@
 //! Sparse PCE: exact recovery of polynomial models, indices against analytic values.
+#![allow(clippy::needless_range_loop)]
 
 use mte_sensitivity::pce::{PceParams, Selection, build_pce, fit_pce, sample_runs};
 use mte_sensitivity::testfn::{Ishigami, Linear};

@@ -1,5 +1,6 @@
 //! Sobol' indices against analytic values (shared/papers/CROSSCHECKS.md, "Analytic sensitivity
 //! references"): Ishigami, G-function k = 41, linear model.
+#![allow(clippy::needless_range_loop)]
 
 use mte_sensitivity::sobol::{SobolParams, sobol};
 use mte_sensitivity::testfn::{GFunction, Ishigami, Linear};
