@@ -553,8 +553,11 @@ pub fn setup_consistency(m: &Machine, data: &Dataset, spec: &FitSpec) -> Result<
                     .unwrap_or((0.0, None))
             })
             .collect();
-        let mx = v.iter().map(|x| x.0).fold(f64::NEG_INFINITY, f64::max);
-        let mn = v.iter().map(|x| x.0).fold(f64::INFINITY, f64::min);
+        // spread over the setups where the parameter is observable (0 when fewer than two)
+        let seen: Vec<f64> = v.iter().filter(|x| x.1.is_some()).map(|x| x.0).collect();
+        let mx = seen.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+        let mn = seen.iter().copied().fold(f64::INFINITY, f64::min);
+        let (mx, mn) = if seen.len() < 2 { (0.0, 0.0) } else { (mx, mn) };
         let mut z: f64 = 0.0;
         for i in 0..v.len() {
             for j in i + 1..v.len() {
