@@ -267,7 +267,12 @@ pub fn chi2_sf(x: f64, dof: f64) -> f64 {
 
 /// χ² quantile: the x with `chi2_cdf(x, dof) = p`.
 pub fn chi2_quantile(p: f64, dof: f64) -> f64 {
-    invert_cdf(|x| chi2_cdf(x, dof), p, 0.0, dof + 20.0 * (2.0 * dof).sqrt() + 100.0)
+    invert_cdf(
+        |x| chi2_cdf(x, dof),
+        p,
+        0.0,
+        dof + 20.0 * (2.0 * dof).sqrt() + 100.0,
+    )
 }
 
 /// Student t cumulative distribution with `dof` degrees of freedom.
@@ -281,7 +286,8 @@ pub fn student_t_quantile(p: f64, dof: f64) -> f64 {
     if p == 0.5 {
         return 0.0;
     }
-    let bound = 1e3_f64.max(10.0 / (dof.min(1.0) * (p.min(1.0 - p)).max(1e-300)).powf(1.0 / dof.max(0.5)));
+    let bound =
+        1e3_f64.max(10.0 / (dof.min(1.0) * (p.min(1.0 - p)).max(1e-300)).powf(1.0 / dof.max(0.5)));
     invert_cdf(|t| student_t_cdf(t, dof), p, -bound, bound)
 }
 
@@ -331,35 +337,95 @@ mod tests {
     // Reference values from scipy.stats (norm, chi2, t, f), run by hand, quoted to the digits shown.
     #[test]
     fn normal_reference_values() {
-        assert_relative_eq!(normal_cdf(1.96), 0.975_002_104_851_779_5, max_relative = 1e-13);
-        assert_relative_eq!(normal_cdf(-3.0), 0.001_349_898_031_630_095, max_relative = 1e-12);
-        assert_relative_eq!(normal_cdf(-10.0), 7.619_853_024_160_527e-24, max_relative = 1e-10);
-        assert_relative_eq!(normal_quantile(0.975), 1.959_963_984_540_054, max_relative = 1e-13);
-        assert_relative_eq!(normal_quantile(1e-10), -6.361_340_902_404_056, max_relative = 1e-11);
+        assert_relative_eq!(
+            normal_cdf(1.96),
+            0.975_002_104_851_779_5,
+            max_relative = 1e-13
+        );
+        assert_relative_eq!(
+            normal_cdf(-3.0),
+            0.001_349_898_031_630_095,
+            max_relative = 1e-12
+        );
+        assert_relative_eq!(
+            normal_cdf(-10.0),
+            7.619_853_024_160_527e-24,
+            max_relative = 1e-10
+        );
+        assert_relative_eq!(
+            normal_quantile(0.975),
+            1.959_963_984_540_054,
+            max_relative = 1e-13
+        );
+        assert_relative_eq!(
+            normal_quantile(1e-10),
+            -6.361_340_902_404_056,
+            max_relative = 1e-11
+        );
     }
 
     #[test]
     fn chi2_reference_values() {
-        assert_relative_eq!(chi2_quantile(0.95, 18.0), 28.869_299_430_392_62, max_relative = 1e-10);
-        assert_relative_eq!(chi2_quantile(0.025, 18.0), 8.230_746_194_756_668, max_relative = 1e-10);
-        assert_relative_eq!(chi2_cdf(3.0, 2.0), 1.0 - (-1.5_f64).exp(), max_relative = 1e-13);
-        assert_relative_eq!(chi2_sf(100.0, 10.0), 5.449_701_982_920_521_5e-17, max_relative = 1e-8);
+        assert_relative_eq!(
+            chi2_quantile(0.95, 18.0),
+            28.869_299_430_392_62,
+            max_relative = 1e-10
+        );
+        assert_relative_eq!(
+            chi2_quantile(0.025, 18.0),
+            8.230_746_194_756_668,
+            max_relative = 1e-10
+        );
+        assert_relative_eq!(
+            chi2_cdf(3.0, 2.0),
+            1.0 - (-1.5_f64).exp(),
+            max_relative = 1e-13
+        );
+        assert_relative_eq!(
+            chi2_sf(100.0, 10.0),
+            5.449_701_982_920_521_5e-17,
+            max_relative = 1e-8
+        );
     }
 
     #[test]
     fn student_and_fisher_reference_values() {
-        assert_relative_eq!(student_t_quantile(0.975, 10.0), 2.228_138_851_986_273, max_relative = 1e-11);
-        assert_relative_eq!(student_t_cdf(-2.0, 5.0), 0.050_969_739_414_929_17, max_relative = 1e-11);
-        assert_relative_eq!(f_cdf(3.0, 4.0, 20.0), 0.956_799_001_665_785_9, max_relative = 1e-10);
-        assert_relative_eq!(f_sf(3.0, 4.0, 20.0) + f_cdf(3.0, 4.0, 20.0), 1.0, max_relative = 1e-14);
+        assert_relative_eq!(
+            student_t_quantile(0.975, 10.0),
+            2.228_138_851_986_273,
+            max_relative = 1e-11
+        );
+        assert_relative_eq!(
+            student_t_cdf(-2.0, 5.0),
+            0.050_969_739_414_929_17,
+            max_relative = 1e-11
+        );
+        assert_relative_eq!(
+            f_cdf(3.0, 4.0, 20.0),
+            0.956_799_001_665_785_9,
+            max_relative = 1e-10
+        );
+        assert_relative_eq!(
+            f_sf(3.0, 4.0, 20.0) + f_cdf(3.0, 4.0, 20.0),
+            1.0,
+            max_relative = 1e-14
+        );
     }
 
     #[test]
     fn quantiles_invert_cdfs() {
         for &p in &[1e-6, 0.01, 0.3, 0.5, 0.9, 0.999_999] {
             assert_relative_eq!(normal_cdf(normal_quantile(p)), p, max_relative = 1e-12);
-            assert_relative_eq!(chi2_cdf(chi2_quantile(p, 7.0), 7.0), p, max_relative = 1e-10);
-            assert_relative_eq!(student_t_cdf(student_t_quantile(p, 3.0), 3.0), p, max_relative = 1e-9);
+            assert_relative_eq!(
+                chi2_cdf(chi2_quantile(p, 7.0), 7.0),
+                p,
+                max_relative = 1e-10
+            );
+            assert_relative_eq!(
+                student_t_cdf(student_t_quantile(p, 3.0), 3.0),
+                p,
+                max_relative = 1e-9
+            );
         }
     }
 

@@ -10,5 +10,8 @@ use super::ReproduceError;
 /// # Errors
 /// [`ReproduceError::Failed`] when a simulation or fit of the generator fails.
 pub fn generate() -> Result<String, ReproduceError> {
-    mte_rtest::reproduce::seed002_report().map_err(|e| ReproduceError::Failed { paper: "seed002", detail: e.to_string() })
+    mte_rtest::reproduce::seed002_report().map_err(|e| ReproduceError::Failed {
+        paper: "seed002",
+        detail: e.to_string(),
+    })
 }

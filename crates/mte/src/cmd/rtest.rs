@@ -8,7 +8,10 @@ use mte::plot::{Axis, Series, XyChart};
 use mte_kinematics::Machine;
 use mte_linalg::Vec3;
 use mte_rtest::io::{dataset_to_strings, read_dataset};
-use mte_rtest::{Dataset, FitSpec, ParamKind, PlanItem, Program, SetupSpec, SimOptions, identify, setup_consistency, simulate, slot_by_name};
+use mte_rtest::{
+    Dataset, FitSpec, ParamKind, PlanItem, Program, SetupSpec, SimOptions, identify,
+    setup_consistency, simulate, slot_by_name,
+};
 
 /// Arguments of `mte rtest`.
 #[derive(clap::Args)]
@@ -68,25 +71,45 @@ fn lib(e: impl std::fmt::Display) -> CliError {
 }
 
 fn load_machine(name: &str) -> Result<Machine, CliError> {
-    if Path::new(name).exists() { Machine::from_file(Path::new(name)).map_err(lib) } else { Machine::library(name).map_err(lib) }
+    if Path::new(name).exists() {
+        Machine::from_file(Path::new(name)).map_err(lib)
+    } else {
+        Machine::library(name).map_err(lib)
+    }
 }
 
 fn parse_errors(m: &Machine, s: &str) -> Result<Vec<f64>, CliError> {
     let mut e = vec![0.0; m.n_slots()];
     for item in s.split(',').map(str::trim).filter(|x| !x.is_empty()) {
-        let (name, val) = item.split_once('=').ok_or_else(|| CliError::Usage(format!("--errors: `{item}` is not NAME=VALUEunit")))?;
+        let (name, val) = item
+            .split_once('=')
+            .ok_or_else(|| CliError::Usage(format!("--errors: `{item}` is not NAME=VALUEunit")))?;
         let slot = slot_by_name(m, name.trim()).map_err(lib)?;
         let val = val.trim();
-        let split = val.find(|c: char| c.is_alphabetic() || c == 'µ').unwrap_or(val.len());
+        let split = val
+            .find(|c: char| c.is_alphabetic() || c == 'µ')
+            .unwrap_or(val.len());
         let (num, unit) = val.split_at(split);
-        let x: f64 = num.parse().map_err(|_| CliError::Usage(format!("--errors: `{num}` in `{item}` is not a number")))?;
+        let x: f64 = num.parse().map_err(|_| {
+            CliError::Usage(format!("--errors: `{num}` in `{item}` is not a number"))
+        })?;
         let v = match (unit, slot.angular) {
             ("um" | "µm", false) => x * 1e-3,
             ("mm" | "", false) => x,
             ("urad" | "µrad", true) => x * 1e-6,
             ("rad" | "", true) => x,
             ("deg", true) => x.to_radians(),
-            _ => return Err(CliError::Usage(format!("--errors: unit `{unit}` does not fit {} ({})", slot.iso, if slot.angular { "angle: urad, rad, deg" } else { "length: um, mm" }))),
+            _ => {
+                return Err(CliError::Usage(format!(
+                    "--errors: unit `{unit}` does not fit {} ({})",
+                    slot.iso,
+                    if slot.angular {
+                        "angle: urad, rad, deg"
+                    } else {
+                        "length: um, mm"
+                    }
+                )));
+            }
         };
         e[slot.slot] += v;
     }
@@ -94,46 +117,87 @@ fn parse_errors(m: &Machine, s: &str) -> Result<Vec<f64>, CliError> {
 }
 
 fn parse_vec3(s: &str) -> Result<Vec3, CliError> {
-    let v: Vec<f64> = s.split(',').map(|x| x.trim().parse::<f64>()).collect::<Result<_, _>>().map_err(|_| CliError::Usage(format!("--ball: `{s}` is not x,y,z")))?;
+    let v: Vec<f64> = s
+        .split(',')
+        .map(|x| x.trim().parse::<f64>())
+        .collect::<Result<_, _>>()
+        .map_err(|_| CliError::Usage(format!("--ball: `{s}` is not x,y,z")))?;
     if v.len() != 3 {
-        return Err(CliError::Usage(format!("--ball: `{s}` needs three numbers")));
+        return Err(CliError::Usage(format!(
+            "--ball: `{s}` needs three numbers"
+        )));
     }
     Ok(Vec3::new(v[0], v[1], v[2]))
 }
 
 fn rotary(m: &Machine) -> impl Fn(&str) -> bool + '_ {
-    move |a: &str| m.axis_index(a).map(|i| matches!(m.axes()[i].kind, mte_kinematics::AxisKind::Rotary)).unwrap_or(false)
+    move |a: &str| {
+        m.axis_index(a)
+            .map(|i| matches!(m.axes()[i].kind, mte_kinematics::AxisKind::Rotary))
+            .unwrap_or(false)
+    }
 }
 
 fn write(path: &Path, text: &str) -> Result<(), CliError> {
     if let Some(p) = path.parent() {
-        std::fs::create_dir_all(p).map_err(|e| CliError::Io { path: p.to_path_buf(), source: e })?;
+        std::fs::create_dir_all(p).map_err(|e| CliError::Io {
+            path: p.to_path_buf(),
+            source: e,
+        })?;
     }
-    std::fs::write(path, text).map_err(|e| CliError::Io { path: path.to_path_buf(), source: e })
+    std::fs::write(path, text).map_err(|e| CliError::Io {
+        path: path.to_path_buf(),
+        source: e,
+    })
 }
 
 /// SVG traces per (setup, test): dx, dy, dz (µm) against the rotary angle with the largest travel.
-fn traces(m: &Machine, ds: &Dataset, model: Option<&[Vec3]>, out: &Path) -> Result<Vec<String>, CliError> {
+fn traces(
+    m: &Machine,
+    ds: &Dataset,
+    model: Option<&[Vec3]>,
+    out: &Path,
+) -> Result<Vec<String>, CliError> {
     let rot = rotary(m);
     let mut files = Vec::new();
     for (si, s) in ds.setups.iter().enumerate() {
-        let mut tests: Vec<String> = ds.readings.iter().filter(|r| r.setup == si).map(|r| r.test.clone()).collect();
+        let mut tests: Vec<String> = ds
+            .readings
+            .iter()
+            .filter(|r| r.setup == si)
+            .map(|r| r.test.clone())
+            .collect();
         tests.dedup();
         for t in tests {
             let rows = ds.select(Some(&t), Some(si));
             let travel = |i: usize| {
                 let v: Vec<f64> = rows.iter().map(|&k| ds.readings[k].q[i]).collect();
-                v.iter().copied().fold(f64::NEG_INFINITY, f64::max) - v.iter().copied().fold(f64::INFINITY, f64::min)
+                v.iter().copied().fold(f64::NEG_INFINITY, f64::max)
+                    - v.iter().copied().fold(f64::INFINITY, f64::min)
             };
-            let ax = (0..ds.axis_names.len()).filter(|&i| rot(&ds.axis_names[i])).max_by(|&a, &b| travel(a).total_cmp(&travel(b))).unwrap_or(0);
+            let ax = (0..ds.axis_names.len())
+                .filter(|&i| rot(&ds.axis_names[i]))
+                .max_by(|&a, &b| travel(a).total_cmp(&travel(b)))
+                .unwrap_or(0);
             let mut chart = XyChart::new(format!("R-test {t}, setup {}", s.id))
                 .x_axis(Axis::new(format!("{} angle", ds.axis_names[ax]), "deg"))
                 .y_axis(Axis::new("ball − nest", "µm"));
             for (c, name) in ["dx", "dy", "dz"].iter().enumerate() {
-                let meas: Vec<(f64, f64)> = rows.iter().map(|&k| (ds.readings[k].q[ax].to_degrees(), ds.readings[k].d_mm[c] * 1e3)).collect();
+                let meas: Vec<(f64, f64)> = rows
+                    .iter()
+                    .map(|&k| {
+                        (
+                            ds.readings[k].q[ax].to_degrees(),
+                            ds.readings[k].d_mm[c] * 1e3,
+                        )
+                    })
+                    .collect();
                 chart = chart.series(Series::scatter(format!("{name} measured"), meas));
                 if let Some(pred) = model {
-                    let p: Vec<(f64, f64)> = rows.iter().map(|&k| (ds.readings[k].q[ax].to_degrees(), pred[k][c] * 1e3)).collect();
+                    let p: Vec<(f64, f64)> = rows
+                        .iter()
+                        .map(|&k| (ds.readings[k].q[ax].to_degrees(), pred[k][c] * 1e3))
+                        .collect();
                     chart = chart.series(Series::line(format!("{name} model"), p));
                 }
             }
@@ -152,7 +216,16 @@ fn traces(m: &Machine, ds: &Dataset, model: Option<&[Vec3]>, out: &Path) -> Resu
 /// Usage, I/O and library errors, each naming the offending input.
 pub fn run(args: &Args) -> Result<(), CliError> {
     match &args.cmd {
-        Sub::Simulate { machine, ball, centring, tests, errors, noise_um, seed, out } => {
+        Sub::Simulate {
+            machine,
+            ball,
+            centring,
+            tests,
+            errors,
+            noise_um,
+            seed,
+            out,
+        } => {
             let m = load_machine(machine)?;
             let e = parse_errors(&m, errors)?;
             let mut plan = Vec::new();
@@ -160,8 +233,12 @@ pub fn run(args: &Args) -> Result<(), CliError> {
                 let mut spec = SetupSpec::new(&format!("ball{}", k + 1), parse_vec3(b)?);
                 let mut hold = None;
                 if let Some(c) = centring.get(k) {
-                    let (a, v) = c.split_once('=').ok_or_else(|| CliError::Usage(format!("--centring: `{c}` is not AXIS=deg")))?;
-                    let v: f64 = v.trim().parse().map_err(|_| CliError::Usage(format!("--centring: `{v}` is not a number")))?;
+                    let (a, v) = c.split_once('=').ok_or_else(|| {
+                        CliError::Usage(format!("--centring: `{c}` is not AXIS=deg"))
+                    })?;
+                    let v: f64 = v.trim().parse().map_err(|_| {
+                        CliError::Usage(format!("--centring: `{v}` is not a number"))
+                    })?;
                     spec = spec.centred_at(a.trim(), v);
                     hold = Some((a.trim().to_string(), v));
                 }
@@ -171,7 +248,11 @@ pub fn run(args: &Args) -> Result<(), CliError> {
                         "BK1" => Program::bk1(&m, None),
                         "BK2" => Program::bk2(&m),
                         "BK4" => Program::bk4(&m, None),
-                        other => return Err(CliError::Usage(format!("--tests: unknown test `{other}` (BK1, BK2, BK4)"))),
+                        other => {
+                            return Err(CliError::Usage(format!(
+                                "--tests: unknown test `{other}` (BK1, BK2, BK4)"
+                            )));
+                        }
                     }
                     .map_err(lib)?;
                     if let Some((a, v)) = &hold
@@ -181,48 +262,130 @@ pub fn run(args: &Args) -> Result<(), CliError> {
                     }
                     programs.push(p);
                 }
-                plan.push(PlanItem { setup: spec, programs });
+                plan.push(PlanItem {
+                    setup: spec,
+                    programs,
+                });
             }
-            let opts = SimOptions { noise_sd_mm: noise_um * 1e-3, seed: *seed, ..Default::default() };
+            let opts = SimOptions {
+                noise_sd_mm: noise_um * 1e-3,
+                seed: *seed,
+                ..Default::default()
+            };
             let sim = simulate(&m, &plan, &e[..], &opts).map_err(lib)?;
-            let (man, csv) = dataset_to_strings(&sim.dataset, "readings.csv", "R-test (simulated)", &rotary(&m));
+            let (man, csv) = dataset_to_strings(
+                &sim.dataset,
+                "readings.csv",
+                "R-test (simulated)",
+                &rotary(&m),
+            );
             write(&out.join("manifest.json"), &man)?;
             write(&out.join("readings.csv"), &csv)?;
             let files = traces(&m, &sim.dataset, None, out)?;
-            println!("wrote {} readings to {} (manifest.json, readings.csv, {} SVG traces)", sim.dataset.readings.len(), out.display(), files.len());
+            println!(
+                "wrote {} readings to {} (manifest.json, readings.csv, {} SVG traces)",
+                sim.dataset.readings.len(),
+                out.display(),
+                files.len()
+            );
             Ok(())
         }
-        Sub::Identify { manifest, squareness, params, out } => {
-            let text = std::fs::read_to_string(manifest).map_err(|e| CliError::Io { path: manifest.clone(), source: e })?;
-            let v: serde_json::Value = serde_json::from_str(&text).map_err(|e| CliError::Library(format!("{}: {e}", manifest.display())))?;
-            let mname = v.get("machine").and_then(|x| x.as_str()).ok_or_else(|| CliError::Library(format!("{}: missing field `machine`", manifest.display())))?;
+        Sub::Identify {
+            manifest,
+            squareness,
+            params,
+            out,
+        } => {
+            let text = std::fs::read_to_string(manifest).map_err(|e| CliError::Io {
+                path: manifest.clone(),
+                source: e,
+            })?;
+            let v: serde_json::Value = serde_json::from_str(&text)
+                .map_err(|e| CliError::Library(format!("{}: {e}", manifest.display())))?;
+            let mname = v.get("machine").and_then(|x| x.as_str()).ok_or_else(|| {
+                CliError::Library(format!("{}: missing field `machine`", manifest.display()))
+            })?;
             let mpath = manifest.parent().unwrap_or(Path::new(".")).join(mname);
-            let m = if mpath.is_file() { Machine::from_file(&mpath).map_err(lib)? } else { Machine::library(mname).map_err(lib)? };
+            let m = if mpath.is_file() {
+                Machine::from_file(&mpath).map_err(lib)?
+            } else {
+                Machine::library(mname).map_err(lib)?
+            };
             let ds = read_dataset(manifest, &rotary(&m)).map_err(lib)?;
             let mut spec = FitSpec::pivots(&m).map_err(lib)?;
             if *squareness {
                 spec = spec.with_squareness(&m).map_err(lib)?;
             }
-            let extra: Vec<&str> = params.split(',').map(str::trim).filter(|x| !x.is_empty()).collect();
+            let extra: Vec<&str> = params
+                .split(',')
+                .map(str::trim)
+                .filter(|x| !x.is_empty())
+                .collect();
             spec = spec.with_names(&m, &extra).map_err(lib)?;
             let fit = identify(&m, &ds, &spec).map_err(lib)?;
-            let pred: Vec<Vec3> = ds.readings.iter().zip(&fit.residuals).map(|(r, e)| r.d_mm - e).collect();
+            let pred: Vec<Vec3> = ds
+                .readings
+                .iter()
+                .zip(&fit.residuals)
+                .map(|(r, e)| r.d_mm - e)
+                .collect();
             let files = traces(&m, &ds, Some(&pred), out)?;
             let mut md = String::new();
-            let _ = writeln!(md, "# R-test identification\n\nData: `{}` ({} readings, {} setups; {}). Machine `{}`.\n", manifest.display(), ds.readings.len(), ds.setups.len(), ds.note, m.name());
-            let _ = writeln!(md, "| ISO | IBS | value | std. uncertainty |\n|---|---|---|---|");
+            let _ = writeln!(
+                md,
+                "# R-test identification\n\nData: `{}` ({} readings, {} setups; {}). Machine `{}`.\n",
+                manifest.display(),
+                ds.readings.len(),
+                ds.setups.len(),
+                ds.note,
+                m.name()
+            );
+            let _ = writeln!(
+                md,
+                "| ISO | IBS | value | std. uncertainty |\n|---|---|---|---|"
+            );
             for e in fit.kinematic() {
                 if let ParamKind::Slot(s) = &e.kind {
                     let (val, u) = if s.angular {
-                        (format!("{:.5} °", e.value.to_degrees()), e.std_uncertainty.map(|u| format!("{:.5} °", u.to_degrees())))
+                        (
+                            format!("{:.5} °", e.value.to_degrees()),
+                            e.std_uncertainty
+                                .map(|u| format!("{:.5} °", u.to_degrees())),
+                        )
                     } else {
-                        (format!("{:.2} µm", e.value * 1e3), e.std_uncertainty.map(|u| format!("{:.2} µm", u * 1e3)))
+                        (
+                            format!("{:.2} µm", e.value * 1e3),
+                            e.std_uncertainty.map(|u| format!("{:.2} µm", u * 1e3)),
+                        )
                     };
-                    let _ = writeln!(md, "| {} | {} | {val} | {} |", s.iso, s.ibs.clone().unwrap_or_default(), u.unwrap_or_else(|| "unobservable".into()));
+                    let _ = writeln!(
+                        md,
+                        "| {} | {} | {val} | {} |",
+                        s.iso,
+                        s.ibs.clone().unwrap_or_default(),
+                        u.unwrap_or_else(|| "unobservable".into())
+                    );
                 }
             }
-            let _ = writeln!(md, "\nσ0 = {:.3} µm per component, {} degrees of freedom, largest residual {:.2} µm.\n", fit.sigma0_mm * 1e3, fit.dof, fit.max_abs_residual_mm() * 1e3);
-            let _ = writeln!(md, "## Identifiability\n\nRank {} of {} parameters; relative singular values: {}.\n", fit.identifiability.rank, fit.identifiability.n_params, fit.identifiability.relative_singular_values.iter().map(|v| format!("{v:.1e}")).collect::<Vec<_>>().join(", "));
+            let _ = writeln!(
+                md,
+                "\nσ0 = {:.3} µm per component, {} degrees of freedom, largest residual {:.2} µm.\n",
+                fit.sigma0_mm * 1e3,
+                fit.dof,
+                fit.max_abs_residual_mm() * 1e3
+            );
+            let _ = writeln!(
+                md,
+                "## Identifiability\n\nRank {} of {} parameters; relative singular values: {}.\n",
+                fit.identifiability.rank,
+                fit.identifiability.n_params,
+                fit.identifiability
+                    .relative_singular_values
+                    .iter()
+                    .map(|v| format!("{v:.1e}"))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            );
             if fit.warnings.is_empty() {
                 let _ = writeln!(md, "All parameters are identifiable from these data.\n");
             }
@@ -232,13 +395,19 @@ pub fn run(args: &Args) -> Result<(), CliError> {
             if ds.setups.len() > 1 {
                 match setup_consistency(&m, &ds, &spec) {
                     Ok(c) => {
-                        let _ = writeln!(md, "\n## Setup consistency (each setup fitted alone)\n\n| parameter | max − min | z |\n|---|---|---|");
+                        let _ = writeln!(
+                            md,
+                            "\n## Setup consistency (each setup fitted alone)\n\n| parameter | max − min | z |\n|---|---|---|"
+                        );
                         for (l, sp, z) in &c.spread {
                             let _ = writeln!(md, "| {l} | {sp:.3e} | {z:.1} |");
                         }
                         let bad = c.inconsistent(5.0);
                         if !bad.is_empty() {
-                            let _ = writeln!(md, "\nSetups disagree beyond 5σ on {bad:?}: the model misses an effect that depends on the ball position (e.g. a linear-axis squareness to a rotary axis, seed 002 Table 2).");
+                            let _ = writeln!(
+                                md,
+                                "\nSetups disagree beyond 5σ on {bad:?}: the model misses an effect that depends on the ball position (e.g. a linear-axis squareness to a rotary axis, seed 002 Table 2)."
+                            );
                         }
                     }
                     Err(e) => {
