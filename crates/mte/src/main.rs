@@ -28,6 +28,8 @@ enum Command {
     Rtest(cmd::rtest::Args),
     /// Volumetric error of a machine with an error set over a grid, tool poses or a program.
     Simulate(cmd::simulate::Args),
+    /// Sensitivity analysis (Morris, Sobol', sparse PCE, local) of a model over uncertain inputs.
+    Sensitivity(cmd::sensitivity::Args),
 }
 
 fn main() -> ExitCode {
@@ -39,6 +41,7 @@ fn main() -> ExitCode {
         Command::Diagnose(args) => cmd::diagnose::run(&args),
         Command::Rtest(args) => cmd::rtest::run(&args),
         Command::Simulate(args) => cmd::simulate::run(&args),
+        Command::Sensitivity(args) => cmd::sensitivity::run(&args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

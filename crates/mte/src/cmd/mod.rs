@@ -3,5 +3,6 @@ pub mod diagnose;
 pub mod iso230_2;
 pub mod machine;
 pub mod rtest;
+pub mod sensitivity;
 pub mod simulate;
 pub mod tracker;
