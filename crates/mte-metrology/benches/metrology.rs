@@ -2,6 +2,8 @@
 //! * `adjust_8x100k`: 8 stations × 100 000 targets, free dead paths, full Gauss–Newton + statistics.
 //! * `gum_seed004_1e4`: GUM-S1 Monte Carlo, 10⁴ trials of the seed 004 network (linearised, cached).
 
+#![allow(missing_docs)] // criterion macros generate undocumented items
+
 use criterion::{Criterion, criterion_group, criterion_main};
 use mte_metrology::adjust::{AdjustParams, adjust};
 use mte_metrology::gum::{McParams, monte_carlo};
