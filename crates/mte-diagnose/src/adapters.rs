@@ -783,12 +783,19 @@ fn prepare_tracker(
         let id = &network.stations[i].id;
         for k in 0..3 {
             let letter = component_letter(k);
+            let direction = Vec3::ith(k, 1.0);
             base.push(Term::single(
                 format!("{id} {}", letter.to_ascii_lowercase()),
                 format!("station {id} position in {letter}"),
                 "tracker station coordinate",
                 Family::Base,
-                DVec::from_fn(n, |r, _| if station_of[r] == i { -u[r][k] } else { 0.0 }),
+                DVec::from_fn(n, |r, _| {
+                    if station_of[r] == i {
+                        -u[r].dot(&direction)
+                    } else {
+                        0.0
+                    }
+                }),
                 Quantity::Length,
             ));
         }

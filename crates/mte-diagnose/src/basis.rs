@@ -19,7 +19,7 @@ pub(crate) fn legendre_columns(values: &[f64], degrees: std::ops::RangeInclusive
     let (lo, hi) = range(values);
     let n = values.len();
     let degrees: Vec<usize> = degrees.collect();
-    if !(hi > lo) {
+    if hi.partial_cmp(&lo) != Some(std::cmp::Ordering::Greater) {
         return DMat::zeros(n, 0);
     }
     let max_degree = degrees.iter().copied().max().unwrap_or(0);
@@ -70,7 +70,7 @@ pub(crate) fn periods_to_scan(values: &[f64], rotary: bool) -> Vec<f64> {
         .fold(f64::INFINITY, f64::min);
     let travel = sorted[sorted.len() - 1] - sorted[0];
     let (lo, hi) = (2.5 * step, travel / 1.5);
-    if !(hi > lo) {
+    if hi.partial_cmp(&lo) != Some(std::cmp::Ordering::Greater) {
         return Vec::new();
     }
     // Uniform in frequency, oversampled twice the Fourier resolution 1/travel; the best
@@ -90,7 +90,7 @@ pub(crate) fn periods_to_scan(values: &[f64], rotary: bool) -> Vec<f64> {
 pub(crate) fn time_constants_to_scan(times: &[f64]) -> Vec<f64> {
     let (lo, hi) = range(times);
     let span = hi - lo;
-    if !(span > 0.0) {
+    if span.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
         return Vec::new();
     }
     let count = 12;

@@ -66,7 +66,7 @@ fn write_dataset(name: &str, hidden: Hidden, seed: u64) -> PathBuf {
     path
 }
 
-fn run(path: &PathBuf) -> mte_diagnose::Diagnosis {
+fn run(path: &std::path::Path) -> mte_diagnose::Diagnosis {
     let prepared = load(path).expect("dataset loads");
     diagnose(
         &prepared.observations,

@@ -199,7 +199,7 @@ fn write_dataset(
     path
 }
 
-fn run(path: &PathBuf) -> Diagnosis {
+fn run(path: &std::path::Path) -> Diagnosis {
     let prepared = load_with_noise(path, Some(NOISE_UM)).expect("dataset loads");
     diagnose(
         &prepared.observations,

@@ -95,7 +95,7 @@ fn write_dataset(name: &str, hidden: &Hidden, seed: u64) -> PathBuf {
     path
 }
 
-fn run(path: &PathBuf) -> Diagnosis {
+fn run(path: &std::path::Path) -> Diagnosis {
     let prepared = load(path).expect("dataset loads");
     diagnose(
         &prepared.observations,
