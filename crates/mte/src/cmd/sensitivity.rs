@@ -13,6 +13,9 @@ use serde_json::Value;
 use std::io::IsTerminal;
 use std::path::PathBuf;
 
+/// One row of the index table: input name, index values per output, and their intervals.
+type IndexRow = (String, Vec<f64>, Vec<[f64; 2]>);
+
 /// Which analysis.
 #[derive(Clone, Copy, Debug, ValueEnum)]
 pub enum Method {
@@ -135,7 +138,7 @@ pub fn run(args: &Args) -> Result<(), CliError> {
     let model = Boxed(model_box.as_ref());
     let names = problem.names();
     // (label, [(index name, values, intervals)])
-    let (json, rows): (Value, Vec<(String, Vec<f64>, Vec<[f64; 2]>)>) = match args.method {
+    let (json, rows): (Value, Vec<IndexRow>) = match args.method {
         Method::Sobol => {
             let p: mte_sensitivity::sobol::SobolParams = params(&v, "sobol", path)?;
             let total = (p.n * (problem.dim() + 2)) as u64;
