@@ -11,13 +11,14 @@ fn um(v_mm: f64) -> String {
     format!("{:.*}", significant_decimals(v.abs() / 10.0).min(3), v)
 }
 
+/// A p-value as text: "p = 0.012", "p = 3.1e-5", "p < 1e-12".
 fn p_text(p: f64) -> String {
     if p < 1e-12 {
-        "< 1e-12".into()
+        "p < 1e-12".into()
     } else if p < 1e-3 {
-        format!("{p:.1e}")
+        format!("p = {p:.1e}")
     } else {
-        format!("{p:.3}")
+        format!("p = {p:.3}")
     }
 }
 
