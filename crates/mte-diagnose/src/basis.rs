@@ -50,31 +50,32 @@ pub(crate) fn sin_cos_columns(values: &[f64], period: f64) -> DMat {
     })
 }
 
-/// Periods to scan along an axis: for a linear axis, log-spaced from 2.5 × the smallest step
-/// between distinct positions (above the Nyquist limit of the sampling) to the travel ÷ 1.5
-/// (below that a period is a polynomial trend); for a rotary axis, the harmonics 2 … 8 of a
-/// turn (the first harmonic is what location errors produce).
+/// Periods to scan along an axis.
+///
+/// For a rotary axis, the harmonics 2 … 8 of a turn (the first harmonic is what location errors
+/// produce). For a linear axis, uniform in frequency (twice the Fourier resolution 1/travel) from
+/// travel ÷ 1.5 (longer periods are a polynomial trend) down to the shortest period the sampling
+/// can tell from its aliases: 2.5 × the alias period of the target positions (see
+/// [`alias_period`]), and never below travel ÷ 1000 or 1 mm. ISO 230-2 asks for irregular target
+/// spacing precisely so that a ball-screw pitch shorter than the mean step is still seen; on a
+/// regular grid of step d the alias period is d and the scan stops at 2.5 d, as Nyquist demands.
 pub(crate) fn periods_to_scan(values: &[f64], rotary: bool) -> Vec<f64> {
     if rotary {
         return (2..=8).map(|k| std::f64::consts::TAU / k as f64).collect();
     }
-    let mut sorted: Vec<f64> = values.to_vec();
-    sorted.sort_by(f64::total_cmp);
-    sorted.dedup_by(|a, b| (*a - *b).abs() < 1e-9);
-    if sorted.len() < 6 {
+    let positions = distinct_sorted(values);
+    if positions.len() < 6 {
         return Vec::new();
     }
-    let step = sorted
-        .windows(2)
-        .map(|w| w[1] - w[0])
-        .fold(f64::INFINITY, f64::min);
-    let travel = sorted[sorted.len() - 1] - sorted[0];
-    let (lo, hi) = (2.5 * step, travel / 1.5);
+    let travel = positions[positions.len() - 1] - positions[0];
+    let shortest_resolvable = (travel / 1000.0).max(1.0);
+    let lo = alias_period(&positions, shortest_resolvable)
+        .map_or(shortest_resolvable, |alias| 2.5 * alias)
+        .max(shortest_resolvable);
+    let hi = travel / 1.5;
     if hi.partial_cmp(&lo) != Some(std::cmp::Ordering::Greater) {
         return Vec::new();
     }
-    // Uniform in frequency, oversampled twice the Fourier resolution 1/travel; the best
-    // period is then refined continuously.
     let df = 0.5 / travel;
     let (f_lo, f_hi) = (1.0 / hi, 1.0 / lo);
     let count = ((f_hi - f_lo) / df).ceil() as usize + 1;
@@ -83,6 +84,56 @@ pub(crate) fn periods_to_scan(values: &[f64], rotary: bool) -> Vec<f64> {
         .collect();
     periods.sort_by(f64::total_cmp);
     periods
+}
+
+/// The longest period, not shorter than `shortest`, at which the sampling positions are nearly
+/// indistinguishable from a constant: the first peak of the spectral window
+/// W(f) = |mean_k exp(2πi f x_k)|² above 0.8 beyond the main lobe. A sine of frequency f₀ and
+/// one of f₀ ± 1/alias then fit the data almost equally well, so periods below twice the alias
+/// cannot be told apart. `None` when the positions are irregular enough to alias nowhere above
+/// `shortest` (the usual ISO 230-2 design with irregular steps).
+pub(crate) fn alias_period(positions: &[f64], shortest: f64) -> Option<f64> {
+    const ALIAS_POWER: f64 = 0.8;
+    let (lo, hi) = range(positions);
+    let travel = hi - lo;
+    if travel.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
+        return None;
+    }
+    // Steps of an eighth of the Fourier resolution find the alias peak (width ~1/travel).
+    let df = 0.125 / travel;
+    let n = positions.len() as f64;
+    // Each position's phasor exp(2πi f x) is advanced by a fixed rotation per frequency step
+    // (renormalised now and then), so the scan costs a few multiplications per position.
+    let f0 = 2.0 / travel;
+    let turn = |f: f64, x: f64| {
+        let phase = std::f64::consts::TAU * f * (x - lo);
+        (phase.cos(), phase.sin())
+    };
+    let mut phasors: Vec<(f64, f64)> = positions.iter().map(|&x| turn(f0, x)).collect();
+    let steps: Vec<(f64, f64)> = positions.iter().map(|&x| turn(df, x)).collect();
+    let count = ((1.0 / shortest - f0) / df).floor().max(0.0) as usize;
+    for k in 0..=count {
+        let (c, s) = phasors
+            .iter()
+            .fold((0.0, 0.0), |(c, s), &(re, im)| (c + re, s + im));
+        if (c * c + s * s) / (n * n) >= ALIAS_POWER {
+            return Some(1.0 / (f0 + k as f64 * df));
+        }
+        let renormalise = k % 64 == 63;
+        for (z, &(sr, si)) in phasors.iter_mut().zip(&steps) {
+            let (re, im) = (z.0 * sr - z.1 * si, z.0 * si + z.1 * sr);
+            let norm = if renormalise { re.hypot(im) } else { 1.0 };
+            *z = (re / norm, im / norm);
+        }
+    }
+    None
+}
+
+fn distinct_sorted(values: &[f64]) -> Vec<f64> {
+    let mut sorted: Vec<f64> = values.to_vec();
+    sorted.sort_by(f64::total_cmp);
+    sorted.dedup_by(|a, b| (*a - *b).abs() < 1e-9);
+    sorted
 }
 
 /// Time constants to scan for a first-order thermal drift: log-spaced from 1/20 to 2 times the
@@ -114,9 +165,40 @@ mod tests {
 
     #[test]
     fn period_grid_respects_sampling() {
+        // Regular grid of step 10 mm: aliases at 10 mm, so the scan stops at 25 mm (Nyquist).
         let x: Vec<f64> = (0..=70).map(|i| i as f64 * 10.0).collect();
+        assert!((alias_period(&x, 1.0).unwrap() - 10.0).abs() < 0.05);
         let p = periods_to_scan(&x, false);
-        assert!((p[0] - 25.0).abs() < 1e-9 && (p[p.len() - 1] - 700.0 / 1.5).abs() < 1e-9);
+        assert!((p[0] - 2.5 * alias_period(&x, 1.0).unwrap()).abs() < 1e-9);
+        assert!((p[p.len() - 1] - 700.0 / 1.5).abs() < 1e-9);
         assert!(p.windows(2).all(|w| w[1] > w[0]));
+    }
+
+    #[test]
+    fn irregular_targets_open_the_scan_below_the_mean_step() {
+        // Steps of 20 mm ± 6 mm (hashed, irregular, as ISO 230-2 recommends):
+        // no alias above 1 mm, so a 5 mm ball-screw pitch lies inside the scan.
+        let x: Vec<f64> = (0..=40)
+            .map(|i| {
+                let uniform = splitmix64(i as u64) as f64 / u64::MAX as f64;
+                let jitter = if i % 40 == 0 {
+                    0.0
+                } else {
+                    12.0 * uniform - 6.0
+                };
+                i as f64 * 20.0 + jitter
+            })
+            .collect();
+        assert_eq!(alias_period(&x, 1.0), None);
+        let p = periods_to_scan(&x, false);
+        assert!(p[0] < 5.0 && p[0] >= 1.0, "shortest period {}", p[0]);
+    }
+
+    /// SplitMix64's output function: a well-mixed deterministic pseudo-random integer.
+    fn splitmix64(i: u64) -> u64 {
+        let mut z = i.wrapping_add(1).wrapping_mul(0x9E37_79B9_7F4A_7C15);
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^ (z >> 31)
     }
 }

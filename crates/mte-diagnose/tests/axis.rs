@@ -22,22 +22,29 @@ struct Hidden {
     zero_drift_um_per_min: f64,
 }
 
-/// Writes 5 bidirectional runs over X ∈ [0, 700] mm at 101 irregularly spaced targets and
-/// returns the manifest path.
+/// 101 targets over X ∈ [0, 700] mm at alternating steps of 8.3 and 5.7 mm.
+fn dense_targets() -> Vec<f64> {
+    (0..=100)
+        .map(|i| i as f64 * 7.0 + if i % 2 == 1 { 1.3 } else { 0.0 })
+        .collect()
+}
+
+/// Writes 5 bidirectional runs at `targets` and returns the manifest path.
 fn write_dataset(name: &str, hidden: Hidden, seed: u64) -> PathBuf {
+    write_dataset_at(name, &dense_targets(), hidden, seed)
+}
+
+fn write_dataset_at(name: &str, targets: &[f64], hidden: Hidden, seed: u64) -> PathBuf {
     let dir = std::env::temp_dir().join(format!("mte-diagnose-axis-{name}-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     let noise = Normal::new(0.0, NOISE_UM).unwrap();
-    let targets: Vec<f64> = (0..=100)
-        .map(|i| i as f64 * 7.0 + if i % 2 == 1 { 1.3 } else { 0.0 })
-        .collect();
     let mut csv = String::from("run,direction,x_mm,t_s,deviation_um\n");
     let mut t = 0.0;
     for run in 1..=5 {
         for dir in [1.0, -1.0] {
             let order: Vec<f64> = if dir > 0.0 {
-                targets.clone()
+                targets.to_vec()
             } else {
                 targets.iter().rev().copied().collect()
             };
@@ -158,6 +165,43 @@ fn hidden_pitch_error_and_reversal_are_both_found() {
         amp.text
     );
     assert!(d.findings.iter().any(|f| f.family == Family::Reversal));
+    assert!(d.extended.held_out_rms * 1e3 < 1.1 * NOISE_UM);
+}
+
+/// A 5 mm ball-screw pitch error under ISO 230-2 targets about 20 mm apart: four times shorter
+/// than the mean step, so only the irregular spacing the standard asks for makes it visible
+/// (targets on a 0.5 mm raster, as an engineer would write them).
+#[test]
+fn pitch_shorter_than_the_target_step_is_found_through_irregular_spacing() {
+    let mut rng = ChaCha8Rng::seed_from_u64(21);
+    let targets: Vec<f64> = (0..=35)
+        .map(|i| {
+            let jitter: f64 = rand::Rng::random_range(&mut rng, -7.0..7.0);
+            if i == 0 || i == 35 {
+                i as f64 * 20.0
+            } else {
+                ((i as f64 * 20.0 + jitter) * 2.0).round() / 2.0
+            }
+        })
+        .collect();
+    let hidden = Hidden {
+        pitch_amplitude_um: 1.0,
+        pitch_period_mm: 5.0,
+        ..Hidden::default()
+    };
+    let d = run(&write_dataset_at("short-pitch", &targets, hidden, 22));
+    let names: Vec<&str> = d.findings.iter().map(|f| f.name.as_str()).collect();
+    assert_eq!(d.findings.len(), 1, "{names:?}");
+    let Family::Periodic { period } = d.findings[0].family else {
+        panic!("expected a periodic error, found {names:?}");
+    };
+    assert!((period - 5.0).abs() < 0.01, "period {period}");
+    let amp = &d.findings[0].estimates[0];
+    assert!(
+        within(amp.value * 1e3, amp.uncertainty * 1e3, 1.0, 2.5),
+        "{}",
+        amp.text
+    );
     assert!(d.extended.held_out_rms * 1e3 < 1.1 * NOISE_UM);
 }
 
