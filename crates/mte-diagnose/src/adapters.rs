@@ -462,6 +462,7 @@ pub(crate) fn prepare_rtest(manifest_path: &Path, noise_um: Option<f64>) -> Resu
         channel: (0..n).map(|i| i % 3).collect(),
         channel_names: vec!["dx".into(), "dy".into(), "dz".into()],
         setup_kind: "ball position".into(),
+        quantity: Quantity::Length,
     };
     observations.validate()?;
     let n_slots = machine.n_slots();
@@ -775,6 +776,7 @@ fn prepare_tracker(
         channel: vec![0; n],
         channel_names: vec!["length".into()],
         setup_kind: "tracker station".into(),
+        quantity: Quantity::Length,
     };
     observations.validate()?;
     // Base: each station's position and dead path.

@@ -52,20 +52,28 @@ pub(crate) fn sin_cos_columns(values: &[f64], period: f64) -> DMat {
 
 /// Periods to scan along an axis.
 ///
-/// For a rotary axis, the harmonics 2 … 8 of a turn (the first harmonic is what location errors
-/// produce). For a linear axis, uniform in frequency (twice the Fourier resolution 1/travel) from
-/// travel ÷ 1.5 (longer periods are a polynomial trend) down to the shortest period the sampling
+/// For a rotary axis, the harmonics of a turn (an error that repeats every turn has no other
+/// periods): 1 … 8, and up to the 180th (2°, a worm wheel's tooth period) as far as the
+/// sampling resolves them without aliasing. For a linear axis, uniform in frequency (twice the
+/// Fourier resolution 1/travel) from travel ÷ 1.5 (longer periods are a polynomial trend) down to the shortest period the sampling
 /// can tell from its aliases: 2.5 × the alias period of the target positions (see
 /// [`alias_period`]), and never below travel ÷ 1000 or 1 mm. ISO 230-2 asks for irregular target
 /// spacing precisely so that a ball-screw pitch shorter than the mean step is still seen; on a
 /// regular grid of step d the alias period is d and the scan stops at 2.5 d, as Nyquist demands.
 pub(crate) fn periods_to_scan(values: &[f64], rotary: bool) -> Vec<f64> {
-    if rotary {
-        return (2..=8).map(|k| std::f64::consts::TAU / k as f64).collect();
-    }
     let positions = distinct_sorted(values);
     if positions.len() < 6 {
         return Vec::new();
+    }
+    if rotary {
+        const TURN: f64 = std::f64::consts::TAU;
+        const MAX_HARMONIC: usize = 180;
+        let resolvable = alias_period(&positions, TURN / MAX_HARMONIC as f64)
+            .map_or(MAX_HARMONIC, |alias| {
+                (TURN / (2.5 * alias)).floor() as usize
+            });
+        let highest = resolvable.clamp(8, MAX_HARMONIC);
+        return (1..=highest).rev().map(|k| TURN / k as f64).collect();
     }
     let travel = positions[positions.len() - 1] - positions[0];
     let shortest_resolvable = (travel / 1000.0).max(1.0);

@@ -238,8 +238,13 @@ pub fn physical_effects(
                                 "periodic positioning error of {axis_name} ({slot_name})"
                             ),
                             meaning: format!(
-                                "positioning error of {axis_name} repeating every {} (ball-screw pitch, encoder or gear error)",
-                                format_period(p, rotary)
+                                "positioning error of {axis_name} repeating every {} ({})",
+                                format_period(p, rotary),
+                                if rotary {
+                                    "encoder eccentricity or graduation error, worm-gear tooth error"
+                                } else {
+                                    "ball-screw pitch, encoder or gear error"
+                                }
                             ),
                             family: Family::Periodic { period: p },
                             columns: cols,

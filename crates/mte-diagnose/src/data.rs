@@ -1,5 +1,6 @@
 //! What the diagnosis works on: scalar observations with their covariates.
 
+use crate::term::Quantity;
 use mte_linalg::DVec;
 use serde::Serialize;
 
@@ -52,6 +53,9 @@ pub struct Observations {
     pub channel_names: Vec<String>,
     /// What kind of setup the dataset has, for reports ("ball position", "tracker station").
     pub setup_kind: String,
+    /// What the observations are: lengths in mm ([`Quantity::Length`]) or angles in rad
+    /// ([`Quantity::Angle`], e.g. a rotary axis' positioning deviations); sets the report's units.
+    pub quantity: Quantity,
 }
 
 impl Observations {

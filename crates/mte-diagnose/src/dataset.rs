@@ -27,6 +27,9 @@ pub struct Manifest {
     /// Stated standard uncertainty of one observation, µm.
     #[serde(default)]
     pub noise_um: Option<f64>,
+    /// Rotary-axis data: stated standard uncertainty of one angular reading, arcsec.
+    #[serde(default)]
+    pub noise_arcsec: Option<f64>,
     /// Axis data: the axis measured (`X`).
     #[serde(default)]
     pub axis: Option<String>,
@@ -215,11 +218,14 @@ pub fn load_with_noise(manifest_path: &Path, noise_um: Option<f64>) -> Result<Pr
             ),
         });
     }
-    if let Some(n) = manifest.noise_um {
-        if !(n.is_finite() && n > 0.0) {
+    for (field, value) in [
+        ("noise_um", manifest.noise_um),
+        ("noise_arcsec", manifest.noise_arcsec),
+    ] {
+        if let Some(n) = value.filter(|n| !(n.is_finite() && *n > 0.0)) {
             return Err(DiagnoseError::Dataset {
                 path: manifest_path.display().to_string(),
-                detail: format!("field `noise_um`: {n} is not a positive length"),
+                detail: format!("field `{field}`: {n} is not a positive uncertainty"),
             });
         }
     }
@@ -246,7 +252,8 @@ pub fn load(manifest_path: &Path) -> Result<Prepared> {
 
 /// Bidirectional positioning runs of one axis (laser interferometer, ISO 230-2 style).
 /// Columns: `run`, `direction` (+1/−1), `<axis>_mm` (or `<axis>_deg` for a rotary axis),
-/// optional `t_s`, and `deviation_um` (measured minus commanded position).
+/// optional `t_s`, and `deviation_um` (measured minus commanded position; `deviation_arcsec`
+/// for a rotary axis).
 fn prepare_axis(manifest: &Manifest, table: &Table, manifest_path: &Path) -> Result<Prepared> {
     let axis = manifest
         .axis
@@ -272,7 +279,38 @@ fn prepare_axis(manifest: &Manifest, table: &Table, manifest_path: &Path) -> Res
     if rotary {
         position.iter_mut().for_each(|p| *p = p.to_radians());
     }
-    let deviation = table.numbers(table.require("deviation_um")?)?;
+    // Linear axes deviate in µm, rotary axes in arcsec (ISO 230-2 units); stored as mm / rad.
+    let (deviation_column, to_internal) = if rotary {
+        ("deviation_arcsec", (1.0f64 / 3600.0).to_radians())
+    } else {
+        ("deviation_um", 1e-3)
+    };
+    if rotary && table.column("deviation_um").is_some() {
+        return Err(table.error(
+            0,
+            format!("column `deviation_um`: {axis} is rotary (`{lower}_deg`), so its deviations are angles: name the column `deviation_arcsec`"),
+        ));
+    }
+    let deviation = table.numbers(table.require(deviation_column)?)?;
+    let stated_noise = match (rotary, manifest.noise_um, manifest.noise_arcsec) {
+        (false, noise, None) | (true, None, noise) => noise,
+        (false, _, Some(_)) => {
+            return Err(DiagnoseError::Dataset {
+                path: manifest_path.display().to_string(),
+                detail: format!(
+                    "field `noise_arcsec`: {axis} is linear (`{lower}_mm`); state its noise as `noise_um`"
+                ),
+            });
+        }
+        (true, Some(_), _) => {
+            return Err(DiagnoseError::Dataset {
+                path: manifest_path.display().to_string(),
+                detail: format!(
+                    "field `noise_um`: {axis} is rotary (`{lower}_deg`); state its noise as `noise_arcsec`"
+                ),
+            });
+        }
+    };
     let dir_col = table.require("direction")?;
     let mut direction = Vec::with_capacity(n);
     for r in 0..n {
@@ -324,21 +362,22 @@ fn prepare_axis(manifest: &Manifest, table: &Table, manifest_path: &Path) -> Res
         });
     }
     let observations = Observations {
-        values: DVec::from_iterator(n, deviation.iter().map(|d| d * 1e-3)),
-        sigma: manifest.noise_um.map(|s| DVec::from_element(n, s * 1e-3)),
+        values: DVec::from_iterator(n, deviation.iter().map(|d| d * to_internal)),
+        sigma: stated_noise.map(|s| DVec::from_element(n, s * to_internal)),
         variables,
         setup,
         setup_names,
         channel: vec![0; n],
         channel_names: vec!["deviation".into()],
         setup_kind: "run".into(),
+        quantity: if rotary {
+            Quantity::Angle
+        } else {
+            Quantity::Length
+        },
     };
     observations.validate()?;
-    let quantity = if rotary {
-        Quantity::Angle
-    } else {
-        Quantity::Length
-    };
+    let quantity = observations.quantity;
     let iso = format!("E{axis}{axis}");
     let offset = Term::single(
         format!("{iso} offset"),

@@ -11,7 +11,7 @@ use crate::fit::{
     Folds, Projector, SEPARABILITY_TOLERANCE, design, max_abs, rms, solve, whitening,
 };
 use crate::structure::{StructureTest, structure_tests};
-use crate::term::{Estimate, Family, Term};
+use crate::term::{Estimate, Family, Quantity, Term};
 use crate::{DiagnoseError, Result};
 
 /// Settings of the diagnosis (builder).
@@ -165,7 +165,10 @@ pub struct Diagnosis {
     pub setups: Vec<String>,
     /// What a setup is.
     pub setup_kind: String,
-    /// Stated noise (RMS of σ), mm, if any.
+    /// What the observations are (lengths in mm or angles in rad): the unit of every RMS,
+    /// maximum and noise figure below.
+    pub quantity: Quantity,
+    /// Stated noise (RMS of σ), mm (or rad), if any.
     pub stated_noise: Option<f64>,
     /// Base model parameters as fitted.
     pub base_parameters: Vec<ParameterEstimate>,
@@ -471,6 +474,7 @@ pub fn diagnose(
         channels: obs.channel_names.clone(),
         setups: obs.setup_names.clone(),
         setup_kind: obs.setup_kind.clone(),
+        quantity: obs.quantity,
         stated_noise: obs.sigma.as_ref().map(rms),
         base_parameters,
         base_rms_per_setup: group_rms(&base_sol.residuals, &obs.setup, obs.setup_names.len()),

@@ -4,11 +4,20 @@
 use std::fmt::Write;
 
 use crate::engine::Diagnosis;
-use crate::term::significant_decimals;
+use crate::term::{Quantity, significant_decimals};
 
-fn um(v_mm: f64) -> String {
-    let v = v_mm * 1e3;
-    format!("{:.*}", significant_decimals(v.abs() / 10.0).min(3), v)
+/// An RMS, maximum or noise level of the observations as engineers quote it: µm for lengths,
+/// arcsec for angles (a rotary axis' positioning deviations).
+fn level(q: Quantity, v: f64) -> String {
+    let (v, unit) = match q {
+        Quantity::Angle => ((v.to_degrees() * 3600.0), "″"),
+        _ => (v * 1e3, " µm"),
+    };
+    format!(
+        "{:.*}{unit}",
+        significant_decimals(v.abs() / 10.0).min(3),
+        v
+    )
 }
 
 /// A p-value as text: "p = 0.012", "p = 3.1e-5", "p < 1e-12".
@@ -28,7 +37,7 @@ pub fn markdown(d: &Diagnosis, title: &str) -> String {
     let _ = writeln!(s, "# Model-discrepancy diagnosis: {title}\n");
     let noise = d
         .stated_noise
-        .map(|n| format!("stated noise {} µm", um(n)))
+        .map(|n| format!("stated noise {}", level(d.quantity, n)))
         .unwrap_or_else(|| "no noise stated".into());
     let _ = writeln!(
         s,
@@ -43,8 +52,8 @@ pub fn markdown(d: &Diagnosis, title: &str) -> String {
     if d.no_discrepancy() {
         let _ = writeln!(
             s,
-            "**No significant discrepancy.** The base model explains the data to the noise: held-out RMS {} µm, σ0 = {:.2}{}.\n",
-            um(d.base.held_out_rms),
+            "**No significant discrepancy.** The base model explains the data to the noise: held-out RMS {}, σ0 = {:.2}{}.\n",
+            level(d.quantity, d.base.held_out_rms),
             d.base.sigma0,
             d.base
                 .chi2_p_value
@@ -62,9 +71,9 @@ pub fn markdown(d: &Diagnosis, title: &str) -> String {
             let _ = writeln!(s, "  {}.", f.meaning);
             let _ = writeln!(
                 s,
-                "  Held-out RMS {} → {} µm ({}).",
-                um(f.held_out_rms_before),
-                um(f.held_out_rms_after),
+                "  Held-out RMS {} → {} ({}).",
+                level(d.quantity, f.held_out_rms_before),
+                level(d.quantity, f.held_out_rms_after),
                 p_text(f.p_value)
             );
             if !f.alternatives.is_empty() {
@@ -81,11 +90,11 @@ pub fn markdown(d: &Diagnosis, title: &str) -> String {
         }
         let _ = writeln!(
             s,
-            "\n**Gain on data the fit did not see:** held-out RMS {} → {} µm, held-out maximum {} → {} µm.\n",
-            um(d.base.held_out_rms),
-            um(d.extended.held_out_rms),
-            um(d.base.held_out_max_abs),
-            um(d.extended.held_out_max_abs)
+            "\n**Gain on data the fit did not see:** held-out RMS {} → {}, held-out maximum {} → {}.\n",
+            level(d.quantity, d.base.held_out_rms),
+            level(d.quantity, d.extended.held_out_rms),
+            level(d.quantity, d.base.held_out_max_abs),
+            level(d.quantity, d.extended.held_out_max_abs)
         );
         if let Some(p) = d.extended.chi2_p_value {
             let consistent = if p > 0.01 {
@@ -105,15 +114,15 @@ pub fn markdown(d: &Diagnosis, title: &str) -> String {
     let _ = writeln!(s, "| quality | fit | held out |\n|---|---|---|");
     let _ = writeln!(
         s,
-        "| RMS µm | {} | {} |",
-        um(d.base.rms),
-        um(d.base.held_out_rms)
+        "| RMS | {} | {} |",
+        level(d.quantity, d.base.rms),
+        level(d.quantity, d.base.held_out_rms)
     );
     let _ = writeln!(
         s,
-        "| max µm | {} | {} |\n",
-        um(d.base.max_abs),
-        um(d.base.held_out_max_abs)
+        "| max | {} | {} |\n",
+        level(d.quantity, d.base.max_abs),
+        level(d.quantity, d.base.held_out_max_abs)
     );
     let _ = writeln!(s, "| parameter | estimate ± u |\n|---|---|");
     for p in &d.base_parameters {
@@ -125,12 +134,12 @@ pub fn markdown(d: &Diagnosis, title: &str) -> String {
         s,
         "\nResidual RMS per {}: {}.",
         d.setup_kind,
-        per(&d.setups, &d.base_rms_per_setup)
+        per(d.quantity, &d.setups, &d.base_rms_per_setup)
     );
     let _ = writeln!(
         s,
         "Residual RMS per channel: {}.\n",
-        per(&d.channels, &d.base_rms_per_channel)
+        per(d.quantity, &d.channels, &d.base_rms_per_channel)
     );
     let _ = writeln!(s, "## Structure left in the base residuals\n");
     let mut tests: Vec<_> = d.structure.iter().collect();
@@ -179,7 +188,7 @@ pub fn markdown(d: &Diagnosis, title: &str) -> String {
                     c.name,
                     p_text(c.p_value),
                     c.held_out_rms
-                        .map(|r| format!(", held out {} µm", um(r)))
+                        .map(|r| format!(", held out {}", level(d.quantity, r)))
                         .unwrap_or_default()
                 )
             })
@@ -203,11 +212,11 @@ pub fn markdown(d: &Diagnosis, title: &str) -> String {
     s
 }
 
-fn per(names: &[String], values: &[f64]) -> String {
+fn per(q: Quantity, names: &[String], values: &[f64]) -> String {
     names
         .iter()
         .zip(values)
-        .map(|(n, v)| format!("{n} {} µm", um(*v)))
+        .map(|(n, v)| format!("{n} {}", level(q, *v)))
         .collect::<Vec<_>>()
         .join(", ")
 }

@@ -230,6 +230,88 @@ fn hidden_scale_error_is_named_scale() {
     );
 }
 
+/// A rotary table's positioning runs (ISO 230-2 for rotary axes, deviations in arcsec): a
+/// worm-gear tooth error of 36 teeth per turn (period 10°) and a reversal, under 25 irregular
+/// targets about 15° apart, so the tooth period is shorter than the mean step.
+#[test]
+fn rotary_axis_worm_gear_error_and_reversal_are_found_in_arcsec() {
+    const NOISE_ARCSEC: f64 = 0.8;
+    let (tooth_arcsec, reversal_arcsec) = (3.0, 4.0);
+    let dir = std::env::temp_dir().join(format!("mte-diagnose-axis-rotary-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let mut rng = ChaCha8Rng::seed_from_u64(31);
+    let noise = Normal::new(0.0, NOISE_ARCSEC).unwrap();
+    let targets: Vec<f64> = (0..=24)
+        .map(|i| {
+            let jitter: f64 = rand::Rng::random_range(&mut rng, -5.0..5.0);
+            let c = i as f64 * 15.0 + if i == 0 || i == 24 { 0.0 } else { jitter };
+            (c * 10.0).round() / 10.0
+        })
+        .collect();
+    let mut csv = String::from("run,direction,c_deg,t_s,deviation_arcsec\n");
+    let mut t = 0.0;
+    for run in 1..=3 {
+        for sign in [1.0, -1.0] {
+            let order: Vec<f64> = if sign > 0.0 {
+                targets.clone()
+            } else {
+                targets.iter().rev().copied().collect()
+            };
+            for c in order {
+                let dev = 2.0
+                    + 0.5 * sign * reversal_arcsec
+                    + tooth_arcsec * (36.0 * c.to_radians() + 1.0).sin()
+                    + noise.sample(&mut rng);
+                let d = if sign > 0.0 { "+" } else { "-" };
+                csv.push_str(&format!("{run},{d},{c:.1},{t:.0},{dev:.3}\n"));
+                t += 10.0;
+            }
+        }
+    }
+    std::fs::write(dir.join("runs.csv"), csv).unwrap();
+    let manifest = format!(
+        r#"{{"format": "mte-dataset/1", "kind": "axis", "axis": "C", "noise_arcsec": {NOISE_ARCSEC}, "data": "runs.csv"}}"#
+    );
+    std::fs::write(dir.join("manifest.json"), manifest).unwrap();
+    let d = run(&dir.join("manifest.json"));
+    let names: Vec<&str> = d.findings.iter().map(|f| f.name.as_str()).collect();
+    assert_eq!(d.findings.len(), 2, "{names:?}");
+    let arcsec = |rad: f64| rad.to_degrees() * 3600.0;
+    let periodic = d
+        .findings
+        .iter()
+        .find(|f| matches!(f.family, Family::Periodic { .. }))
+        .expect("periodic found");
+    let Family::Periodic { period } = periodic.family else {
+        unreachable!()
+    };
+    assert!((period.to_degrees() - 10.0).abs() < 1e-9, "period {period}");
+    let amp = &periodic.estimates[0];
+    assert!(
+        within(
+            arcsec(amp.value),
+            arcsec(amp.uncertainty),
+            tooth_arcsec,
+            2.5
+        ),
+        "{}",
+        amp.text
+    );
+    let reversal = d
+        .findings
+        .iter()
+        .find(|f| f.family == Family::Reversal)
+        .expect("reversal found");
+    let e = &reversal.estimates[0];
+    assert!(
+        within(arcsec(e.value), arcsec(e.uncertainty), reversal_arcsec, 2.5),
+        "{}",
+        e.text
+    );
+    let report = mte_diagnose::report::markdown(&d, "rotary");
+    assert!(report.contains("″") && !report.contains(" µm"), "{report}");
+}
+
 #[test]
 fn bad_axis_files_give_errors_naming_the_line() {
     let dir = std::env::temp_dir().join(format!("mte-diagnose-axis-bad-{}", std::process::id()));

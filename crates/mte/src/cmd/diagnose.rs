@@ -2,7 +2,7 @@
 
 use std::path::PathBuf;
 
-use mte_diagnose::{DiagnoseParams, Diagnosis, diagnose, load_with_noise, report};
+use mte_diagnose::{DiagnoseParams, Diagnosis, Quantity, diagnose, load_with_noise, report};
 use plotters::prelude::*;
 
 use mte::CliError;
@@ -72,7 +72,7 @@ pub fn run(args: &Args) -> Result<(), CliError> {
 }
 
 /// Held-out residuals before and after the extension against the covariate that exposed the
-/// cause, in µm.
+/// cause, in µm (arcsec for angular observations).
 fn residual_svg(d: &Diagnosis, index: usize) -> String {
     let s = &d.residual_series[index];
     let (x_scale, x_unit) = match s.variable.as_str() {
@@ -82,8 +82,12 @@ fn residual_svg(d: &Diagnosis, index: usize) -> String {
         _ => (1.0, "mm"),
     };
     let xs: Vec<f64> = s.x.iter().map(|x| x * x_scale).collect();
-    let before: Vec<f64> = s.before.iter().map(|v| v * 1e3).collect();
-    let after: Vec<f64> = s.after.iter().map(|v| v * 1e3).collect();
+    let (y_scale, y_desc) = match d.quantity {
+        Quantity::Angle => (180.0 / std::f64::consts::PI * 3600.0, "residual (arcsec)"),
+        _ => (1e3, "residual (µm)"),
+    };
+    let before: Vec<f64> = s.before.iter().map(|v| v * y_scale).collect();
+    let after: Vec<f64> = s.after.iter().map(|v| v * y_scale).collect();
     let (x_lo, x_hi) = bounds(&xs);
     let (y_lo, y_hi) = bounds(
         before
@@ -113,11 +117,7 @@ fn residual_svg(d: &Diagnosis, index: usize) -> String {
             } else {
                 format!("{} ({x_unit})", s.variable)
             };
-            let _ = chart
-                .configure_mesh()
-                .x_desc(x_desc)
-                .y_desc("residual (µm)")
-                .draw();
+            let _ = chart.configure_mesh().x_desc(x_desc).y_desc(y_desc).draw();
             let before_style = RGBColor(200, 60, 40).mix(0.6).filled();
             let after_style = RGBColor(30, 90, 180).mix(0.8).filled();
             let _ = chart
