@@ -283,6 +283,8 @@ pub fn diagnose(
         }
     }
     let mut used = vec![false; pool.len()];
+    let mut times_chosen = vec![0usize; pool.len()];
+    let mut scanned: Vec<ScannedTerm> = Vec::new();
     let mut steps = Vec::new();
     let mut findings: Vec<Finding> = Vec::new();
     let mut not_separable: Vec<NotSeparable> = Vec::new();
@@ -329,7 +331,7 @@ pub fn diagnose(
             let score = |t: &Term| rss - projector.increment(&t.columns, residuals).delta_rss;
             if let Some(refined) = candidates[source[ci]].refine(vi, &score) {
                 inc = projector.increment(&refined.columns, residuals);
-                pool[ci][vi] = refined;
+                pool[ci][vi] = nth_component(refined, times_chosen[ci]);
             }
             let k = inc.new_rank;
             if dof <= k + 1 {
@@ -433,17 +435,44 @@ pub fn diagnose(
             added: Some(chosen.name.clone()),
             variants_tested,
         });
-        used[ci] = true;
         // A drift or a polynomial of the same cause is a different candidate; the chosen one's
-        // own alternatives (other periods, other degrees of the same slot) are retired with it.
+        // own alternatives (other degrees of the same slot) are retired with it. A periodic
+        // error stays open for another period: a ball screw shows its pitch and a longer wave
+        // of the screw, a rotary table its eccentricity and its worm-gear tooth error. The
+        // period already in the model is no longer separable, so the next one is another.
+        times_chosen[ci] += 1;
+        let recurs = matches!(chosen.family, Family::Periodic { .. })
+            && times_chosen[ci] < MAX_PERIODIC_COMPONENTS;
         for (cj, variants) in pool.iter().enumerate() {
             if variants[0].name == chosen.name {
                 used[cj] = true;
             }
         }
+        if recurs {
+            used[ci] = false;
+            let k = times_chosen[ci];
+            for t in &mut pool[ci] {
+                *t = nth_component(t.clone(), k);
+            }
+        }
         model.terms.push(chosen);
+        scanned.push(ScannedTerm {
+            candidate: source[ci],
+            variant: vi,
+            component: times_chosen[ci] - 1,
+            finding: findings.len() - 1,
+        });
+        // Hyper-parameters found with the other effects still in the residuals are biased (an
+        // undersampled pitch leaks into the long periods of an irregular grid): refine each
+        // scanned term again with all the others fitted, so a biased period is corrected rather
+        // than patched by a spurious neighbour.
+        let changed = refit_scanned(&mut model, &scanned, &mut findings, candidates, obs, &w);
         current_sol = solve(&model.design(n), &obs.values, &w);
-        current_cv = cv;
+        current_cv = if changed {
+            folds.residuals(&model.design(n), &obs.values, &w)
+        } else {
+            cv
+        };
     }
 
     let x = model.design(n);
@@ -489,6 +518,76 @@ pub fn diagnose(
         residual_series,
         alpha: params.alpha,
     })
+}
+
+/// An added term that came from a scanned candidate, so its hyper-parameter can be refined
+/// again once later terms are in the model.
+struct ScannedTerm {
+    candidate: usize,
+    variant: usize,
+    /// Which component of a recurring cause (0 = first).
+    component: usize,
+    /// Its finding (and its place after the base terms in the model).
+    finding: usize,
+}
+
+/// Refines the hyper-parameter of every scanned term with all other terms fitted; keeps a
+/// refinement only when it lowers the weighted residual sum of squares. Returns whether any
+/// term changed.
+fn refit_scanned(
+    model: &mut ModelState,
+    scanned: &[ScannedTerm],
+    findings: &mut [Finding],
+    candidates: &[Box<dyn Candidate>],
+    obs: &Observations,
+    w: &DVec,
+) -> bool {
+    let n = obs.len();
+    let base_count = model.terms.len() - findings.len();
+    let mut changed = false;
+    for s in scanned {
+        let j = base_count + s.finding;
+        let rss_with = |t: &Term| {
+            let mut terms: Vec<&Term> = model.terms.iter().collect();
+            terms[j] = t;
+            solve(&design(&terms, n), &obs.values, w).rss_w
+        };
+        let Some(refined) = candidates[s.candidate].refine(s.variant, &rss_with) else {
+            continue;
+        };
+        if rss_with(&refined) >= rss_with(&model.terms[j]) {
+            continue;
+        }
+        let refined = nth_component(refined, s.component);
+        let f = &mut findings[s.finding];
+        f.family = refined.family.clone();
+        f.meaning = refined.meaning.clone();
+        model.terms[j] = refined;
+        changed = true;
+    }
+    changed
+}
+
+/// Periodic components one slot may show (pitch, a longer wave of the screw, a harmonic).
+const MAX_PERIODIC_COMPONENTS: usize = 3;
+
+/// The `k`-th further component of a recurring cause (`k` = 0 is the first, unchanged): its
+/// own name and coefficient names, so reports and parameter tables tell the components apart.
+fn nth_component(mut t: Term, k: usize) -> Term {
+    if k == 0 {
+        return t;
+    }
+    let ordinal = ["second", "third"].get(k - 1).copied().unwrap_or("further");
+    let stem = t.name.split(" #").next().unwrap_or_default().to_string();
+    t.name = format!("{stem} #{}", k + 1);
+    let label = t.label.split(", ").next().unwrap_or_default().to_string();
+    t.label = format!("{label}, {ordinal} period");
+    for (c, _) in &mut t.coefficients {
+        // "EXX periodic sin" → "EXX periodic #2 sin"
+        let tail = c.rsplit(' ').next().unwrap_or_default().to_string();
+        *c = format!("{} {tail}", t.name);
+    }
+    t
 }
 
 /// What would separate the chosen term from its alternatives: the hints of the chosen term and
