@@ -212,7 +212,7 @@ pub fn physical_effects(
                     out.push(Box::new(
                         term(
                             &format!(" poly{degree}"),
-                            format!("{} of {axis}, polynomial up to degree {degree}", slot.label),
+                            format!("{}, polynomial in {axis} up to degree {degree}", slot.label),
                             format!("{} varying smoothly along {axis}", slot.meaning),
                             Family::Component { degree },
                             cols,
