@@ -404,3 +404,12 @@ fn cross_blocks_equal_dense_covariance() {
         }
     }
 }
+
+#[test]
+fn scale_95_is_the_chi2_quantile() {
+    let q = mte_metrology::stats::chi2_quantile(0.95, 3.0).sqrt();
+    assert!(
+        (mte_metrology::adjust::Ellipsoid::SCALE_95 - q).abs() < 1e-12,
+        "{q}"
+    );
+}
