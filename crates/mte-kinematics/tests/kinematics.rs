@@ -147,6 +147,21 @@ fn jacobian_matches_finite_differences() {
     }
 }
 
+/// `Jacobian::apply` (unrolled, allocation-free) equals the dense product J·e.
+#[test]
+fn jacobian_apply_is_the_matrix_product() {
+    let mut rng = ChaCha8Rng::seed_from_u64(12);
+    for m in library() {
+        let q = random_q(&m, &mut rng);
+        let e = random_e(&m, &mut rng, 1.0);
+        let j = m.jacobian(&q);
+        let dense = &j.matrix * mte_linalg::nalgebra::DVector::from_column_slice(&e);
+        let gap =
+            (j.apply(&e).to_vec6() - mte_linalg::Vec6::from_column_slice(dense.as_slice())).norm();
+        assert!(gap <= 1e-12 * dense.norm(), "{}: {gap}", m.name());
+    }
+}
+
 /// The first-order model J·e differs from the exact pose error by a second-order term:
 /// halving every error divides the gap by 4 (within 2 %).
 #[test]

@@ -1,6 +1,7 @@
 //! Criterion benches: `cargo bench -p mte-metrology --bench metrology`.
 //! * `adjust_8x100k`: 8 stations × 100 000 targets, free dead paths, full Gauss–Newton + statistics.
 //! * `gum_seed004_1e4`: GUM-S1 Monte Carlo, 10⁴ trials of the seed 004 network (linearised, cached).
+//! * `gum_seed004_1e5`, `gum_seed004_1e6`: the same with 10⁵ and 10⁶ trials (sensitivity prebuilt).
 
 #![allow(missing_docs)] // criterion macros generate undocumented items
 
@@ -94,21 +95,23 @@ fn benches(c: &mut Criterion) {
             .unwrap()
         })
     });
-    g.bench_function("gum_seed004_1e5", |b| {
-        let f = LinearisedTracker::new(&adj, TrackerQuantity::MaxDeviation).unwrap();
-        b.iter(|| {
-            monte_carlo(
-                &f,
-                &inputs,
-                &McParams {
-                    trials: 100_000,
-                    coverage: 0.95,
-                    seed: 1,
-                },
-            )
-            .unwrap()
-        })
-    });
+    let f = LinearisedTracker::new(&adj, TrackerQuantity::MaxDeviation).unwrap();
+    for (name, trials) in [("gum_seed004_1e5", 100_000), ("gum_seed004_1e6", 1_000_000)] {
+        g.bench_function(name, |b| {
+            b.iter(|| {
+                monte_carlo(
+                    &f,
+                    &inputs,
+                    &McParams {
+                        trials,
+                        coverage: 0.95,
+                        seed: 1,
+                    },
+                )
+                .unwrap()
+            })
+        });
+    }
     g.finish();
 }
 
