@@ -1086,14 +1086,14 @@ fn finish(
         covs.push(c);
     }
     let crit = stats::normal_quantile(1.0 - params.alpha_snooping / 2.0);
-    let mut pvv = 0.0;
+    // [pvv] summed serially, in observation order, so it does not depend on the thread count.
+    let pvv: f64 = lin.f.iter().zip(&lin.w).map(|(f, w)| f * f * w).sum();
     let observations: Vec<ObservationStats> = net
         .observations
-        .iter()
+        .par_iter()
         .enumerate()
         .map(|(k, o)| {
             let v = -lin.f[k];
-            pvv += v * v * lin.w[k];
             let r = redundancy[k].clamp(0.0, 1.0);
             let wstat = if r > 1e-9 {
                 v / (o.sigma_mm * r.sqrt())
@@ -1154,7 +1154,7 @@ fn finish(
         .collect();
     let targets = net
         .targets
-        .iter()
+        .par_iter()
         .enumerate()
         .map(|(j, t)| AdjustedTarget {
             id: t.id.clone(),
