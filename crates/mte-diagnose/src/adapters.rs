@@ -9,7 +9,7 @@ use mte_linalg::{DMat, DVec, Vec3};
 
 use crate::candidate::{SlotEffect, SlotRole, physical_effects};
 use crate::data::{Observations, Variable, VariableKind};
-use crate::dataset::{Manifest, Prepared, Table};
+use crate::dataset::{Manifest, Prepared, Table, read_table};
 use crate::term::{Family, Quantity, Term};
 use crate::{DiagnoseError, Result};
 
@@ -374,7 +374,7 @@ fn read_axes(machine: &Machine, table: &Table) -> Result<Vec<Vec<f64>>> {
         .map(|axis| {
             let lower = axis.name.to_lowercase();
             match axis.kind {
-                AxisKind::Linear => table.numbers(table.require(&format!("{lower}_mm"))?),
+                AxisKind::Linear => Ok(table.numbers(table.require(&format!("{lower}_mm"))?)?),
                 AxisKind::Rotary => Ok(table
                     .numbers(table.require(&format!("{lower}_deg"))?)?
                     .into_iter()
@@ -639,7 +639,7 @@ fn prepare_tracker(
         .targets
         .as_deref()
         .ok_or_else(|| missing("targets", "the targets table: id and commanded axes"))?;
-    let targets = Table::read(&dir.join(targets_file))?;
+    let targets = read_table(&dir.join(targets_file))?;
     let axes = read_axes(machine, &targets)?;
     let id_col = targets.require("id")?;
     let ids: Vec<String> = (0..targets.len())
@@ -689,7 +689,7 @@ fn prepare_tracker(
             .position(|s| s.id == lengths.text(r, cs))
             .ok_or_else(|| {
                 lengths.error(
-                    r,
+                    lengths.line(r),
                     format!(
                         "column `station`: `{}` is not a station of the manifest",
                         lengths.text(r, cs)
@@ -701,7 +701,7 @@ fn prepare_tracker(
             .position(|t| t == lengths.text(r, ct))
             .ok_or_else(|| {
                 lengths.error(
-                    r,
+                    lengths.line(r),
                     format!(
                         "column `target`: `{}` is not in {targets_file}",
                         lengths.text(r, ct)
@@ -729,7 +729,7 @@ fn prepare_tracker(
     };
     let adjustment =
         adjust(&network, &AdjustParams::default()).map_err(|e| DiagnoseError::Dataset {
-            path: lengths.path().into(),
+            path: lengths.source_name.clone(),
             detail: format!("network adjustment: {e}"),
         })?;
     let n = network.observations.len();

@@ -73,113 +73,23 @@ pub struct Prepared {
     pub title: String,
 }
 
-/// A parsed CSV table with line numbers for error messages.
-pub(crate) struct Table {
-    path: String,
-    header: Vec<String>,
-    rows: Vec<(usize, Vec<String>)>,
+pub(crate) use mte_linalg::csv::CsvTable as Table;
+
+/// Reads the CSV table at `path` (the workspace's one reader, [`mte_linalg::csv`]).
+pub(crate) fn read_table(path: &Path) -> Result<Table> {
+    let text = std::fs::read_to_string(path).map_err(|e| DiagnoseError::Dataset {
+        path: path.display().to_string(),
+        detail: e.to_string(),
+    })?;
+    Ok(Table::parse(&text, &path.display().to_string())?)
 }
 
-impl Table {
-    pub(crate) fn read(path: &Path) -> Result<Table> {
-        let text = std::fs::read_to_string(path).map_err(|e| DiagnoseError::Dataset {
-            path: path.display().to_string(),
-            detail: e.to_string(),
-        })?;
-        Table::parse(&text, &path.display().to_string())
-    }
-
-    pub(crate) fn parse(text: &str, path: &str) -> Result<Table> {
-        let mut lines = text
-            .lines()
-            .enumerate()
-            .filter(|(_, l)| !l.trim().is_empty() && !l.trim_start().starts_with('#'));
-        let Some((_, head)) = lines.next() else {
-            return Err(DiagnoseError::Dataset {
-                path: path.into(),
-                detail: "empty file: expected a header line".into(),
-            });
-        };
-        let header: Vec<String> = head.split(',').map(|h| h.trim().to_string()).collect();
-        let mut rows = Vec::new();
-        for (i, line) in lines {
-            let cells: Vec<String> = line.split(',').map(|c| c.trim().to_string()).collect();
-            if cells.len() != header.len() {
-                return Err(DiagnoseError::Dataset {
-                    path: path.into(),
-                    detail: format!(
-                        "line {}: {} fields, the header has {}",
-                        i + 1,
-                        cells.len(),
-                        header.len()
-                    ),
-                });
-            }
-            rows.push((i + 1, cells));
-        }
-        Ok(Table {
-            path: path.into(),
-            header,
-            rows,
-        })
-    }
-
-    pub(crate) fn len(&self) -> usize {
-        self.rows.len()
-    }
-
-    pub(crate) fn column(&self, name: &str) -> Option<usize> {
-        self.header.iter().position(|h| h == name)
-    }
-
-    pub(crate) fn require(&self, name: &str) -> Result<usize> {
-        self.column(name).ok_or_else(|| DiagnoseError::Dataset {
-            path: self.path.clone(),
-            detail: format!(
-                "missing column `{name}` (header: {})",
-                self.header.join(", ")
-            ),
-        })
-    }
-
-    pub(crate) fn text(&self, row: usize, col: usize) -> &str {
-        &self.rows[row].1[col]
-    }
-
-    pub(crate) fn number(&self, row: usize, col: usize) -> Result<f64> {
-        let (line, cells) = &self.rows[row];
-        let v: f64 = cells[col].parse().map_err(|_| DiagnoseError::Dataset {
-            path: self.path.clone(),
-            detail: format!(
-                "line {line}, column `{}`: `{}` is not a number",
-                self.header[col], cells[col]
-            ),
-        })?;
-        if !v.is_finite() {
-            return Err(DiagnoseError::Dataset {
-                path: self.path.clone(),
-                detail: format!(
-                    "line {line}, column `{}`: {v} is not finite",
-                    self.header[col]
-                ),
-            });
-        }
-        Ok(v)
-    }
-
-    pub(crate) fn numbers(&self, col: usize) -> Result<Vec<f64>> {
-        (0..self.len()).map(|r| self.number(r, col)).collect()
-    }
-
-    pub(crate) fn error(&self, row: usize, detail: String) -> DiagnoseError {
+impl From<mte_linalg::csv::CsvError> for DiagnoseError {
+    fn from(e: mte_linalg::csv::CsvError) -> Self {
         DiagnoseError::Dataset {
-            path: self.path.clone(),
-            detail: format!("line {}: {detail}", self.rows[row].0),
+            path: e.source_name,
+            detail: format!("line {}: {}", e.line, e.message),
         }
-    }
-
-    pub(crate) fn path(&self) -> &str {
-        &self.path
     }
 }
 
@@ -233,7 +143,7 @@ pub fn load_with_noise(manifest_path: &Path, noise_um: Option<f64>) -> Result<Pr
         .parent()
         .map(Path::to_path_buf)
         .unwrap_or_else(|| PathBuf::from("."));
-    let table = Table::read(&dir.join(&manifest.data))?;
+    let table = read_table(&dir.join(&manifest.data))?;
     match manifest.kind.as_str() {
         "axis" => prepare_axis(&manifest, &table, manifest_path),
         other => {
@@ -266,12 +176,12 @@ fn prepare_axis(manifest: &Manifest, table: &Table, manifest_path: &Path) -> Res
     let (pos_col, rotary) = match (table.column(&format!("{lower}_mm")), table.column(&format!("{lower}_deg"))) {
         (Some(c), _) => (c, false),
         (None, Some(c)) => (c, true),
-        (None, None) => return Err(table.error(0, format!("missing column `{lower}_mm` (or `{lower}_deg`) with the commanded position of {axis}"))),
+        (None, None) => return Err(table.error(table.header_line, format!("missing column `{lower}_mm` (or `{lower}_deg`) with the commanded position of {axis}")).into()),
     };
     let n = table.len();
     if n == 0 {
         return Err(DiagnoseError::Dataset {
-            path: table.path().into(),
+            path: table.source_name.clone(),
             detail: "no observations".into(),
         });
     }
@@ -286,10 +196,12 @@ fn prepare_axis(manifest: &Manifest, table: &Table, manifest_path: &Path) -> Res
         ("deviation_um", 1e-3)
     };
     if rotary && table.column("deviation_um").is_some() {
-        return Err(table.error(
-            0,
-            format!("column `deviation_um`: {axis} is rotary (`{lower}_deg`), so its deviations are angles: name the column `deviation_arcsec`"),
-        ));
+        return Err(table
+            .error(
+                table.header_line,
+                format!("column `deviation_um`: {axis} is rotary (`{lower}_deg`), so its deviations are angles: name the column `deviation_arcsec`"),
+            )
+            .into());
     }
     let deviation = table.numbers(table.require(deviation_column)?)?;
     let stated_noise = match (rotary, manifest.noise_um, manifest.noise_arcsec) {
@@ -318,9 +230,12 @@ fn prepare_axis(manifest: &Manifest, table: &Table, manifest_path: &Path) -> Res
             "+" | "+1" | "1" => 1.0,
             "-" | "-1" => -1.0,
             other => {
-                return Err(
-                    table.error(r, format!("column `direction`: `{other}`, expected + or -"))
-                );
+                return Err(table
+                    .error(
+                        table.line(r),
+                        format!("column `direction`: `{other}`, expected + or -"),
+                    )
+                    .into());
             }
         });
     }

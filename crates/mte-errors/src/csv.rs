@@ -1,94 +1,40 @@
-//! A small CSV reader with line numbers and unit-suffixed headers.
-//!
-//! Rules: comma-separated, first non-comment line is the header, blank lines and lines starting
-//! with `#` are skipped, fields are trimmed, no quoting. Numbers must be finite (`NaN`, `inf` are
-//! rejected with the line and column).
+//! Unit-suffixed columns (`x_mm`, `a_deg`) on the workspace's one CSV reader,
+//! [`mte_linalg::csv`] (rules there: header line, `#` comments, trimmed fields, finite numbers).
 
 use crate::error::{Error, Result};
 use crate::units::{Unit, split_suffix};
+pub use mte_linalg::csv::{CsvError, CsvTable};
 
-/// A parsed table.
-#[derive(Debug, Clone)]
-pub struct CsvTable {
-    /// File name used in error messages.
-    pub source_name: String,
-    /// Column names as written.
-    pub headers: Vec<String>,
-    /// Line number of the header.
-    pub header_line: usize,
-    /// (line number, fields) per data row.
-    pub rows: Vec<(usize, Vec<String>)>,
+impl From<CsvError> for Error {
+    fn from(e: CsvError) -> Error {
+        Error::Csv {
+            source_name: e.source_name,
+            line: e.line,
+            message: e.message,
+        }
+    }
 }
 
-impl CsvTable {
-    /// Parse `text`; `source_name` names the file in errors.
-    ///
-    /// # Errors
-    /// [`Error::Csv`] for an empty table, duplicate or empty column names, or a row with the wrong
-    /// number of fields.
-    pub fn parse(text: &str, source_name: &str) -> Result<CsvTable> {
-        let err = |line, message: String| Error::Csv {
-            source_name: source_name.to_string(),
-            line,
-            message,
-        };
-        let mut headers: Option<(usize, Vec<String>)> = None;
-        let mut rows = Vec::new();
-        for (i, raw) in text.lines().enumerate() {
-            let line = i + 1;
-            let t = raw.trim().trim_start_matches('\u{feff}');
-            if t.is_empty() || t.starts_with('#') {
-                continue;
-            }
-            let fields: Vec<String> = t.split(',').map(|f| f.trim().to_string()).collect();
-            match &headers {
-                None => {
-                    for (j, h) in fields.iter().enumerate() {
-                        if h.is_empty() {
-                            return Err(err(line, format!("column {} has an empty name", j + 1)));
-                        }
-                        if fields[..j].contains(h) {
-                            return Err(err(line, format!("column `{h}` appears twice")));
-                        }
-                    }
-                    headers = Some((line, fields));
-                }
-                Some((_, h)) => {
-                    if fields.len() != h.len() {
-                        return Err(err(
-                            line,
-                            format!(
-                                "expected {} fields (as the header), found {}",
-                                h.len(),
-                                fields.len()
-                            ),
-                        ));
-                    }
-                    rows.push((line, fields));
-                }
-            }
-        }
-        let Some((header_line, headers)) = headers else {
-            return Err(err(0, "the table is empty (no header line)".into()));
-        };
-        Ok(CsvTable {
-            source_name: source_name.to_string(),
-            headers,
-            header_line,
-            rows,
-        })
-    }
-
-    /// Index of the column named exactly `name`.
-    pub fn column(&self, name: &str) -> Option<usize> {
-        self.headers.iter().position(|h| h == name)
-    }
-
-    /// Find a column `base_<unit>` (e.g. `x_mm`, `a_deg`); returns its index and unit.
+/// Column lookup by unit suffix, and errors of this crate's type, on a [`CsvTable`].
+pub trait UnitColumns {
+    /// Finds a column `base_<unit>` (e.g. `x_mm`, `a_deg`); returns its index and unit.
     ///
     /// # Errors
     /// [`Error::Csv`] on the header line when two columns match (`x_mm` and `x_um`).
-    pub fn column_with_unit(&self, base: &str) -> Result<Option<(usize, Unit)>> {
+    fn column_with_unit(&self, base: &str) -> Result<Option<(usize, Unit)>>;
+
+    /// Like [`UnitColumns::column_with_unit`] but the column must exist.
+    ///
+    /// # Errors
+    /// [`Error::Csv`] on the header line naming the missing column and the columns found.
+    fn require_with_unit(&self, base: &str, example: &str) -> Result<(usize, Unit)>;
+
+    /// An error of this crate at `line` of the table's file.
+    fn err(&self, line: usize, message: String) -> Error;
+}
+
+impl UnitColumns for CsvTable {
+    fn column_with_unit(&self, base: &str) -> Result<Option<(usize, Unit)>> {
         let mut found = None;
         for (j, h) in self.headers.iter().enumerate() {
             if let Some((b, u)) = split_suffix(h)
@@ -106,11 +52,7 @@ impl CsvTable {
         Ok(found)
     }
 
-    /// Like [`CsvTable::column_with_unit`] but the column must exist.
-    ///
-    /// # Errors
-    /// [`Error::Csv`] on the header line naming the missing column and the columns found.
-    pub fn require_with_unit(&self, base: &str, example: &str) -> Result<(usize, Unit)> {
+    fn require_with_unit(&self, base: &str, example: &str) -> Result<(usize, Unit)> {
         self.column_with_unit(base)?.ok_or_else(|| {
             self.err(
                 self.header_line,
@@ -122,38 +64,8 @@ impl CsvTable {
         })
     }
 
-    /// The number in row `r`, column `c`.
-    ///
-    /// # Errors
-    /// [`Error::Csv`] naming the line and column when the field is not a finite number.
-    pub fn number(&self, r: usize, c: usize) -> Result<f64> {
-        let (line, f) = &self.rows[r];
-        let s = &f[c];
-        match s.parse::<f64>() {
-            Ok(v) if v.is_finite() => Ok(v),
-            Ok(_) => Err(self.err(
-                *line,
-                format!("column `{}`: `{s}` is not a finite number", self.headers[c]),
-            )),
-            Err(_) => Err(self.err(
-                *line,
-                format!("column `{}`: `{s}` is not a number", self.headers[c]),
-            )),
-        }
-    }
-
-    /// The line number of data row `r`.
-    pub fn line(&self, r: usize) -> usize {
-        self.rows[r].0
-    }
-
-    /// An error at `line` of this file.
-    pub fn err(&self, line: usize, message: String) -> Error {
-        Error::Csv {
-            source_name: self.source_name.clone(),
-            line,
-            message,
-        }
+    fn err(&self, line: usize, message: String) -> Error {
+        self.error(line, message).into()
     }
 }
 
@@ -178,11 +90,9 @@ mod tests {
         assert!(e.contains("line 5") && e.contains("error_um"), "{e}");
         let e = t.require_with_unit("time", "t_s").unwrap_err().to_string();
         assert!(e.contains("line 2") && e.contains("missing column"), "{e}");
-        let e = CsvTable::parse("a,b\n1\n", "x.csv")
-            .unwrap_err()
-            .to_string();
-        assert!(e.contains("line 2"), "{e}");
-        assert!(CsvTable::parse("# only\n", "x.csv").is_err());
-        assert!(CsvTable::parse("a,a\n", "x.csv").is_err());
+        let e = t.require_with_unit("time", "t_s").unwrap_err();
+        assert!(matches!(e, Error::Csv { line: 2, .. }), "{e}");
+        let both = CsvTable::parse("x_mm,x_um\n1,2\n", "x.csv").unwrap();
+        assert!(both.column_with_unit("x").is_err());
     }
 }

@@ -1,7 +1,7 @@
 //! Error sets: named error parameters with values or models, and distributions for sampling.
 //! JSON form `"format": "mte-errors/1"` (see `docs/formats.md`).
 
-use crate::csv::CsvTable;
+use crate::csv::{CsvTable, UnitColumns};
 use crate::distribution::Distribution;
 use crate::error::{Error, Result};
 use crate::models::{

@@ -1,6 +1,6 @@
 //! Volumetric error simulation over a grid, a list of poses or a program.
 
-use crate::csv::CsvTable;
+use crate::csv::{CsvTable, UnitColumns};
 use crate::error::{Error, Result};
 use crate::evaluator::{AxisState, Evaluator};
 use crate::models::Direction;

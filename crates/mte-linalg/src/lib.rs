@@ -11,6 +11,8 @@ pub use geometry::{
 
 pub mod stats;
 
+pub mod csv;
+
 pub mod bridge;
 pub mod error;
 pub mod lstsq;

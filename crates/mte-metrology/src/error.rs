@@ -64,3 +64,13 @@ pub type Result<T> = std::result::Result<T, MetrologyError>;
 pub(crate) fn invalid(what: impl Into<String>) -> MetrologyError {
     MetrologyError::InvalidInput { what: what.into() }
 }
+
+impl From<mte_linalg::csv::CsvError> for MetrologyError {
+    fn from(e: mte_linalg::csv::CsvError) -> Self {
+        MetrologyError::Parse {
+            source_name: e.source_name,
+            line: e.line,
+            what: e.message,
+        }
+    }
+}

@@ -6,6 +6,7 @@ use crate::error::{MetrologyError, Result};
 use crate::network::{
     DeadPath, LengthObservation, LengthUncertainty, Network, Station, Target, Vec3,
 };
+use mte_linalg::csv::CsvTable;
 use std::collections::HashMap;
 
 fn perr(src: &str, line: usize, what: impl Into<String>) -> MetrologyError {
@@ -13,96 +14,6 @@ fn perr(src: &str, line: usize, what: impl Into<String>) -> MetrologyError {
         source_name: src.to_string(),
         line,
         what: what.into(),
-    }
-}
-
-/// A parsed CSV table: header names and rows (with their 1-based line numbers).
-#[derive(Clone, Debug)]
-pub struct Csv {
-    /// Source name used in errors.
-    pub source_name: String,
-    /// Header fields (trimmed).
-    pub header: Vec<String>,
-    /// (line number, fields).
-    pub rows: Vec<(usize, Vec<String>)>,
-}
-
-impl Csv {
-    /// Parse comma-separated text; `#` starts a comment line; blank lines are skipped.
-    ///
-    /// # Errors
-    /// Missing header or a row with a different number of fields.
-    pub fn parse(source_name: &str, text: &str) -> Result<Csv> {
-        let mut header: Option<Vec<String>> = None;
-        let mut rows = Vec::new();
-        for (i, raw) in text.lines().enumerate() {
-            let line = raw.trim();
-            if line.is_empty() || line.starts_with('#') {
-                continue;
-            }
-            let f: Vec<String> = line.split(',').map(|s| s.trim().to_string()).collect();
-            match &header {
-                None => header = Some(f),
-                Some(h) => {
-                    if f.len() != h.len() {
-                        return Err(perr(
-                            source_name,
-                            i + 1,
-                            format!("{} fields, header has {}", f.len(), h.len()),
-                        ));
-                    }
-                    rows.push((i + 1, f));
-                }
-            }
-        }
-        let header =
-            header.ok_or_else(|| perr(source_name, 1, "empty file: expected a header line"))?;
-        Ok(Csv {
-            source_name: source_name.to_string(),
-            header,
-            rows,
-        })
-    }
-
-    /// Column index of a required header name.
-    ///
-    /// # Errors
-    /// The column is missing.
-    pub fn col(&self, name: &str) -> Result<usize> {
-        self.header.iter().position(|h| h == name).ok_or_else(|| {
-            perr(
-                &self.source_name,
-                1,
-                format!(
-                    "missing column `{name}` (header: {})",
-                    self.header.join(",")
-                ),
-            )
-        })
-    }
-
-    /// Optional column.
-    pub fn opt_col(&self, name: &str) -> Option<usize> {
-        self.header.iter().position(|h| h == name)
-    }
-
-    /// Parse a finite number in a row/column.
-    ///
-    /// # Errors
-    /// Not a finite number.
-    pub fn num(&self, row: &(usize, Vec<String>), col: usize) -> Result<f64> {
-        let s = &row.1[col];
-        match s.parse::<f64>() {
-            Ok(v) if v.is_finite() => Ok(v),
-            _ => Err(perr(
-                &self.source_name,
-                row.0,
-                format!(
-                    "field `{}`: expected a finite number, got `{s}`",
-                    self.header[col]
-                ),
-            )),
-        }
     }
 }
 
@@ -128,17 +39,17 @@ pub fn network_from_csv(
     lengths: (&str, &str),
     default_u: LengthUncertainty,
 ) -> Result<Network> {
-    let sc = Csv::parse(stations.0, stations.1)?;
+    let sc = CsvTable::parse(stations.1, stations.0)?;
     let (ci, cx, cy, cz) = (
-        sc.col("id")?,
-        sc.col("x_mm")?,
-        sc.col("y_mm")?,
-        sc.col("z_mm")?,
+        sc.require("id")?,
+        sc.require("x_mm")?,
+        sc.require("y_mm")?,
+        sc.require("z_mm")?,
     );
-    let cd = sc.opt_col("dead_path_mm");
-    let cf = sc.opt_col("dead_path");
+    let cd = sc.column("dead_path_mm");
+    let cf = sc.column("dead_path");
     let mut st = Vec::new();
-    for r in &sc.rows {
+    for (i, r) in sc.rows.iter().enumerate() {
         let dp = match cf.map(|c| r.1[c].to_ascii_lowercase()) {
             None => DeadPath::Free,
             Some(s) if s == "free" || s.is_empty() => DeadPath::Free,
@@ -153,26 +64,26 @@ pub fn network_from_csv(
         };
         st.push(Station {
             id: r.1[ci].clone(),
-            position_mm: Vec3::new(sc.num(r, cx)?, sc.num(r, cy)?, sc.num(r, cz)?),
+            position_mm: Vec3::new(sc.number(i, cx)?, sc.number(i, cy)?, sc.number(i, cz)?),
             dead_path_mm: match cd {
-                Some(c) => sc.num(r, c)?,
+                Some(c) => sc.number(i, c)?,
                 None => 0.0,
             },
             dead_path: dp,
         });
     }
-    let tc = Csv::parse(targets.0, targets.1)?;
+    let tc = CsvTable::parse(targets.1, targets.0)?;
     let (ti, tx, ty, tz) = (
-        tc.col("id")?,
-        tc.col("x_mm")?,
-        tc.col("y_mm")?,
-        tc.col("z_mm")?,
+        tc.require("id")?,
+        tc.require("x_mm")?,
+        tc.require("y_mm")?,
+        tc.require("z_mm")?,
     );
     let mut tg = Vec::new();
-    for r in &tc.rows {
+    for (i, r) in tc.rows.iter().enumerate() {
         tg.push(Target {
             id: r.1[ti].clone(),
-            nominal_mm: Vec3::new(tc.num(r, tx)?, tc.num(r, ty)?, tc.num(r, tz)?),
+            nominal_mm: Vec3::new(tc.number(i, tx)?, tc.number(i, ty)?, tc.number(i, tz)?),
         });
     }
     let smap: HashMap<&str, usize> = st
@@ -185,11 +96,15 @@ pub fn network_from_csv(
         .enumerate()
         .map(|(i, s)| (s.id.as_str(), i))
         .collect();
-    let lc = Csv::parse(lengths.0, lengths.1)?;
-    let (ls, lt, ll) = (lc.col("station")?, lc.col("target")?, lc.col("length_mm")?);
-    let lsig = lc.opt_col("sigma_um");
+    let lc = CsvTable::parse(lengths.1, lengths.0)?;
+    let (ls, lt, ll) = (
+        lc.require("station")?,
+        lc.require("target")?,
+        lc.require("length_mm")?,
+    );
+    let lsig = lc.column("sigma_um");
     let mut obs = Vec::new();
-    for r in &lc.rows {
+    for (i, r) in lc.rows.iter().enumerate() {
         let s = *smap.get(r.1[ls].as_str()).ok_or_else(|| {
             perr(
                 &lc.source_name,
@@ -204,7 +119,7 @@ pub fn network_from_csv(
                 format!("field `target`: unknown target id `{}`", r.1[lt]),
             )
         })?;
-        let l = lc.num(r, ll)?;
+        let l = lc.number(i, ll)?;
         if l < 0.0 {
             return Err(perr(
                 &lc.source_name,
@@ -214,7 +129,7 @@ pub fn network_from_csv(
         }
         let sigma_mm = match lsig {
             Some(c) => {
-                let v = lc.num(r, c)?;
+                let v = lc.number(i, c)?;
                 if v <= 0.0 {
                     return Err(perr(
                         &lc.source_name,

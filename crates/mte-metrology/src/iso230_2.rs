@@ -17,7 +17,7 @@
 //! | A↑ | max(x̄ᵢ↑ + 2sᵢ↑) − min(x̄ᵢ↑ − 2sᵢ↑) (↓ alike); A from both directions |
 
 use crate::error::{MetrologyError, Result, invalid};
-use crate::io::Csv;
+use mte_linalg::csv::CsvTable;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 
@@ -243,15 +243,15 @@ pub fn evaluate(readings: &[Reading]) -> Result<AxisResult> {
 /// # Errors
 /// Parse errors naming the source, line and field.
 pub fn readings_from_csv(source_name: &str, text: &str) -> Result<Vec<Reading>> {
-    let c = Csv::parse(source_name, text)?;
+    let c = CsvTable::parse(text, source_name)?;
     let (ct, cr, cd, cx) = (
-        c.col("target_mm")?,
-        c.col("run")?,
-        c.col("direction")?,
-        c.col("deviation_um")?,
+        c.require("target_mm")?,
+        c.require("run")?,
+        c.require("direction")?,
+        c.require("deviation_um")?,
     );
     let mut out = Vec::new();
-    for r in &c.rows {
+    for (i, r) in c.rows.iter().enumerate() {
         let dir = match r.1[cd].to_ascii_lowercase().as_str() {
             "up" | "+" | "pos" | "positive" => Direction::Up,
             "down" | "-" | "neg" | "negative" => Direction::Down,
@@ -274,10 +274,10 @@ pub fn readings_from_csv(source_name: &str, text: &str) -> Result<Vec<Reading>> 
                 ),
             })?;
         out.push(Reading {
-            target_mm: c.num(r, ct)?,
+            target_mm: c.number(i, ct)?,
             run,
             direction: dir,
-            deviation_um: c.num(r, cx)?,
+            deviation_um: c.number(i, cx)?,
         });
     }
     Ok(out)

@@ -86,3 +86,12 @@ pub enum RtestError {
 
 /// Result alias of `mte-rtest`.
 pub type Result<T> = std::result::Result<T, RtestError>;
+
+impl From<mte_linalg::csv::CsvError> for RtestError {
+    fn from(e: mte_linalg::csv::CsvError) -> Self {
+        RtestError::Invalid {
+            field: format!("{} line {}", e.source_name, e.line),
+            message: e.message,
+        }
+    }
+}

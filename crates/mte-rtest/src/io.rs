@@ -5,6 +5,7 @@
 use crate::error::{Result, RtestError};
 use crate::model::{Dataset, Reading, Setup};
 use mte_linalg::Vec3;
+use mte_linalg::csv::CsvTable;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -118,80 +119,48 @@ pub fn dataset_from_str(
             centring_t_s: s.centring_t_s,
         });
     }
-    let mut lines = csv
-        .lines()
-        .enumerate()
-        .filter(|(_, l)| !l.trim().is_empty() && !l.starts_with('#'));
-    let (_, header) = lines.next().ok_or_else(|| RtestError::TooShort {
-        what: csv_name.into(),
-        found: 0,
-        needed: 1,
-        unit: "header lines".into(),
-    })?;
-    let cols: Vec<String> = header.split(',').map(|s| s.trim().to_string()).collect();
-    let col = |name: &str| -> Result<usize> {
-        cols.iter()
-            .position(|c| c == name)
-            .ok_or_else(|| RtestError::Invalid {
-                field: format!("{csv_name} line 1"),
-                message: format!("missing column `{name}` (header: {header})"),
-            })
-    };
-    let c_setup = col("setup")?;
-    let c_test = col("test")?;
-    let c_t = col("t_s")?;
+    let table = CsvTable::parse(csv, csv_name)?;
+    let c_setup = table.require("setup")?;
+    let c_test = table.require("test")?;
+    let c_t = table.require("t_s")?;
     let c_axes: Vec<usize> = man
         .axes
         .iter()
-        .map(|a| col(&axis_unit(a, rotary(a))))
-        .collect::<Result<_>>()?;
-    let c_d = [col("dx_um")?, col("dy_um")?, col("dz_um")?];
+        .map(|a| table.require(&axis_unit(a, rotary(a))))
+        .collect::<std::result::Result<_, _>>()?;
+    let c_d = [
+        table.require("dx_um")?,
+        table.require("dy_um")?,
+        table.require("dz_um")?,
+    ];
     let mut readings = Vec::new();
-    for (ln, line) in lines {
-        let f: Vec<&str> = line.split(',').map(|s| s.trim()).collect();
-        let at = |c: usize| -> Result<&str> {
-            f.get(c).copied().ok_or_else(|| RtestError::Invalid {
-                field: format!("{csv_name} line {}", ln + 1),
-                message: format!("{} fields, the header has {}", f.len(), cols.len()),
-            })
-        };
-        let num = |c: usize| -> Result<f64> {
-            let s = at(c)?;
-            let v: f64 = s.parse().map_err(|_| RtestError::Invalid {
-                field: format!("{csv_name} line {}, column {}", ln + 1, cols[c]),
-                message: format!("`{s}` is not a number"),
-            })?;
-            if !v.is_finite() {
-                return Err(RtestError::Invalid {
-                    field: format!("{csv_name} line {}, column {}", ln + 1, cols[c]),
-                    message: "not finite".into(),
-                });
-            }
-            Ok(v)
-        };
-        let sid = at(c_setup)?;
+    for r in 0..table.len() {
+        let sid = table.text(r, c_setup);
         let setup = setups
             .iter()
             .position(|s| s.id == sid)
             .ok_or_else(|| RtestError::Invalid {
-                field: format!("{csv_name} line {}, column setup", ln + 1),
+                field: format!("{csv_name} line {}, column setup", table.line(r)),
                 message: format!("setup `{sid}` is not in the manifest"),
             })?;
         let q = man
             .axes
             .iter()
             .zip(&c_axes)
-            .map(|(a, &c)| num(c).map(|v| if rotary(a) { v.to_radians() } else { v }))
+            .map(|(a, &c)| {
+                let v = table.number(r, c)?;
+                Ok(if rotary(a) { v.to_radians() } else { v })
+            })
             .collect::<Result<Vec<f64>>>()?;
         readings.push(Reading {
             setup,
-            test: at(c_test)?.to_string(),
-            t_s: num(c_t)?,
+            test: table.text(r, c_test).to_string(),
+            t_s: table.number(r, c_t)?,
             q,
             d_mm: Vec3::new(
-                num(c_d[0])? * 1e-3,
-                num(c_d[1])? * 1e-3,
-                num(c_d[2])? * 1e-3,
+                table.number(r, c_d[0])? * 1e-3,
+                table.number(r, c_d[1])? * 1e-3,
+                table.number(r, c_d[2])? * 1e-3,
             ),
         });
     }

@@ -1,7 +1,7 @@
 //! Tabulated measurements (e.g. a laser-interferometer run), linearly interpolated.
 
 use super::{Context, ErrorModel};
-use crate::csv::CsvTable;
+use crate::csv::{CsvTable, UnitColumns};
 use crate::error::{Result, invalid};
 use crate::units::Kind;
 
