@@ -451,11 +451,13 @@ pub fn seed002_report() -> Result<String> {
     );
     let _ = writeln!(
         w,
-        "Shape versus the paper: 69 → {:.1} → {:.1} (worse) → {:.1} µm against the paper's 69 → 19 → 38.2 → 15 µm. The pivots-only and the final values are within about 3 µm of the paper; the squareness step is worse as in the paper but by less ({:.1} versus 38.2 µm). Compensating all eight location errors from a joint fit of both positions gives {:.1} µm.\n",
+        "Shape versus the paper: 69 → {:.1} → {:.1} (worse) → {:.1} µm against the paper's 69 → 19 → 38.2 → 15 µm (differences {:+.1}, {:+.1}, {:+.1} µm). Compensating all eight location errors from a joint fit of both positions gives {:.1} µm.\n",
         main.pivots.max_range_um,
         main.squareness.max_range_um,
         main.corrected[2].max_range_um,
-        main.squareness.max_range_um,
+        main.pivots.max_range_um - 19.0,
+        main.squareness.max_range_um - 38.2,
+        main.corrected[2].max_range_um - 15.0,
         main.two_position.max_range_um
     );
     // the same sequence on the Y-axis errors alone (no pivot or tilt errors) shows the mechanism
@@ -497,7 +499,7 @@ pub fn seed002_report() -> Result<String> {
     }
     let _ = writeln!(
         w,
-        "\n(1) BK1 at one ball position books the sag there, α·y, as a ZOB offset (fitted {:+.1} µm at Y = −177 mm, {:+.1} µm at Y = +177 mm, true 0). (2) In BK2 the ball circles through Y = ±177 mm, so the sag tilts the measured circle and the fit books it as a C-axis tilt (fitted AOC {:+.4}°, true 0). (3) BK4 (C = 2·(B + 90°)) passes B = 0 at C = 180°, the session's centring pose (ball at Y = −177 mm), and B = ±90° with the ball at Y = +177 mm. Pivots only: the sag there appears as a Z error of the same sign at B = −90° and B = +90°, range ≈ 2·177 mm·|α| = 18.6 µm — the paper's 19 µm (the fitted ZOB alone moves the uncompensated error from X into Z). (4) The false AOC is compensated as a tilt of C, and B turns the C frame by ±90°: at B = ±90° it becomes an X correction of opposite sign at the two ends for an X error that does not exist, while the sag stays in Z — the X range doubles (the paper's 38.2 µm is twice 19 µm). With the session centred at C = 0° (ball at Y = +177 mm), BK4 reaches B = ±90° with the ball at the centring Y, where the false AOC does nothing, and B = 0 with the ball at Y = −177 mm, where it is right, so the squareness step improves BK4. (5) The two-position BK1 exposes the sag as a B/Y squareness; correcting AOB by δ tilts the B line in the controller so that it follows the Y motion, which removes the sag in X and Z; what remains is a Y error, because a B-line tilt also moves points off the B–Y plane in Y, which the Y sag does not.\n",
+        "\n(1) BK1 at one ball position books the sag there, α·y, as a ZOB offset (fitted {:+.1} µm at Y = −177 mm, {:+.1} µm at Y = +177 mm, true 0). (2) In BK2 the ball circles through Y = ±177 mm, so the sag tilts the measured circle and the fit books it as a C-axis tilt (fitted AOC {:+.4}°, true 0). (3) BK4 (C = 2·(B + 90°)) passes B = 0 at C = 180°, the session's centring pose (ball at Y = −177 mm), and B = ±90° with the ball at Y = +177 mm. Pivots only: the sag there appears as a Z error of the same sign at B = −90° and B = +90°, range ≈ 2·177 mm·|α| = 18.6 µm — the paper's 19 µm (the fitted ZOB alone moves the uncompensated error from X into Z). (4) The false AOC is compensated as a tilt of C, and B turns the C frame by ±90°: at B = ±90° it becomes an X correction of opposite sign at the two ends for an X error that does not exist, while the sag stays in Z — the X range becomes about twice the sag's Z range (the paper's 38.2 µm is twice its 19 µm). With the session centred at C = 0° (ball at Y = +177 mm), BK4 reaches B = ±90° with the ball at the centring Y, where the false AOC does nothing, and B = 0 with the ball at Y = −177 mm, where it is right, so the squareness step improves BK4. (5) The two-position BK1 exposes the sag as a B/Y squareness; correcting AOB by δ tilts the B line in the controller so that it follows the Y motion, which removes most of it in X and Z; the largest remaining range is in Y, because a B-line tilt also moves points lying off the B–Y plane in Y, which the Y sag does not.\n",
         um(sag_main.fit.get("EZ0B").map(|e| e.value).unwrap_or(0.0)),
         um(sag_other.fit.get("EZ0B").map(|e| e.value).unwrap_or(0.0)),
         deg(sag_main.fit.get("EA0C").map(|e| e.value).unwrap_or(0.0))
