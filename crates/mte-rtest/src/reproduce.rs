@@ -695,4 +695,32 @@ mod tests {
             approx::assert_relative_eq!(far, delta * 100.0, max_relative = 1e-3);
         }
     }
+
+    /// The mechanism on a pure Y sag δz = α·y (noise-free): pivots only leaves the sag's Z range
+    /// 2·177 mm·|α|; with the session at Y = −177 mm the false AOC adds an X range of twice that;
+    /// at Y = +177 mm the squareness step improves BK4 instead.
+    #[test]
+    fn y_sag_alone_doubles_bk4_with_the_false_c_tilt() {
+        let m = Machine::library(MACHINE).unwrap();
+        let alpha = -0.0186 / 354.0;
+        let sag = Truth {
+            base: vec![0.0; m.n_slots()],
+            yi: m.axis_index("Y").unwrap(),
+            sz: m.slot_index_by_name("Y.motion.dz").unwrap(),
+            sx: m.slot_index_by_name("Y.motion.dx").unwrap(),
+            alpha,
+            gamma: 0.0,
+        };
+        let opts = SimOptions {
+            noise_sd_mm: 0.0,
+            ..Default::default()
+        };
+        let sag_range_um = 2.0 * 177.0 * alpha.abs() * 1e3;
+        let minus = bk4_story(&m, &sag.field(), 180.0, &opts).unwrap();
+        // 1 µm: second-order terms and the small YOC the fit books from the sag
+        assert!((minus.pivots.range_um[2] - sag_range_um).abs() < 1.0);
+        assert!((minus.squareness.range_um[0] - 2.0 * sag_range_um).abs() < 1.0);
+        let plus = bk4_story(&m, &sag.field(), 0.0, &opts).unwrap();
+        assert!(plus.squareness.max_range_um < plus.pivots.max_range_um);
+    }
 }
