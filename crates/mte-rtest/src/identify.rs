@@ -309,26 +309,20 @@ pub fn identify(m: &Machine, data: &Dataset, spec: &FitSpec) -> Result<Fit> {
             a_s.column_mut(j).fill(0.0);
         }
     }
-    let svd = a_s.clone().svd(false, true);
-    let v_t = svd
-        .v_t
-        .as_ref()
-        .ok_or_else(|| RtestError::Fit("SVD failed".into()))?;
-    let mut order: Vec<usize> = (0..p).collect();
-    order.sort_by(|&i, &j| svd.singular_values[j].total_cmp(&svd.singular_values[i]));
-    let smax = svd.singular_values[order[0]];
+    // shared SVD (faer): singular values in non-increasing order, full V; nr > p was checked
+    let svd = mte_linalg::lstsq::Svd::new(&a_s)
+        .map_err(|e| RtestError::Fit(format!("SVD of the design matrix: {e}")))?;
+    let sv = &svd.singular_values;
+    let smax = sv[0];
     if smax.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
         return Err(RtestError::Fit(
             "the readings do not depend on any fitted parameter".into(),
         ));
     }
-    let rel: Vec<f64> = order
-        .iter()
-        .map(|&i| svd.singular_values[i] / smax)
-        .collect();
+    let rel: Vec<f64> = sv.iter().map(|&s| s / smax).collect();
     let rank = rel.iter().filter(|&&r| r > spec.rank_rtol).count();
     let combo = |k: usize| -> Combination {
-        let row = v_t.row(order[k]);
+        let row = svd.v.column(k);
         let mut terms: Vec<(String, f64)> = (0..p)
             .filter(|&j| row[j].abs() >= 0.1)
             .map(|j| (labels[j].clone(), row[j]))
@@ -343,7 +337,7 @@ pub fn identify(m: &Machine, data: &Dataset, spec: &FitSpec) -> Result<Fit> {
     // so a k-dimensional null space reads as k separate trade-offs (basis-independent)
     let unobservable: Vec<Combination> = {
         let k = p - rank;
-        let mut nmat = DMat::from_fn(k, p, |r, j| v_t[(order[rank + r], j)]);
+        let mut nmat = DMat::from_fn(k, p, |r, j| svd.v[(j, rank + r)]);
         let mut used = vec![false; p];
         for r in 0..k {
             let (mut best, mut bj) = (0.0, 0);
@@ -394,9 +388,8 @@ pub fn identify(m: &Machine, data: &Dataset, spec: &FitSpec) -> Result<Fit> {
     // pseudo-inverse on the retained subspace (scaled coordinates)
     let mut pinv_s = DMat::zeros(p, p); // V S^-2 V^T
     let mut vs_inv = DMat::zeros(p, p); // V S^-1 (columns)
-    for (k, &i) in order.iter().enumerate().take(rank) {
-        let s = svd.singular_values[i];
-        let v = v_t.row(i).transpose();
+    for (k, &s) in sv.iter().enumerate().take(rank) {
+        let v = svd.v.column(k).into_owned();
         pinv_s += &v * v.transpose() / (s * s);
         vs_inv.set_column(k, &(v / s));
     }
