@@ -610,6 +610,11 @@ pub fn generate() -> Result<String, ReproduceError> {
          motion-increment effect of any guideway error. Four of the paper's six (q5e, q6e, (θC)e, \
          εzx45) are position-independent too, but which of these errors carry long levers depends \
          on where each error's frame is placed, and the paper does not say.\n\
+         - q6e (the paper's second) has E = {:.3} µm here: q6 = (0, 0, −200) mm runs along the \
+         tool axis, and an offset along the tool axis does not move a flank-milled surface (every \
+         normal is ⟂ to the ruling the tool lies on). That the paper ranks it second suggests its \
+         E is not the normal deviation (perhaps the tool-tip position error, or a ball-end cut); \
+         the paper does not define the direction of E.\n\
          - Every Eₙ is linear in its own tolerance: the tolerances are ours (listed above). Position-\
          independent errors among the leading six as f goes 0.25, 0.5, 1, 2, 4: {}; what does \
          not survive the choice is the order inside that group.\n\n\
@@ -621,6 +626,8 @@ pub fn generate() -> Result<String, ReproduceError> {
         top_share(&st.motion, 6),
         constant_share,
         xhi - xlo,
+        cat.index_of("q6e")
+            .map_or(f64::NAN, |i| st.motion.effect[i] * 1e3),
         [0.25, 0.5, 1.0, 2.0, 4.0]
             .iter()
             .map(|&f| {
