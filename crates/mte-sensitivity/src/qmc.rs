@@ -65,7 +65,10 @@ pub(crate) fn joe_kuo_rows() -> &'static [JoeKuoRow] {
 /// If `dim > MAX_DIM` (callers check).
 pub(crate) fn direction_numbers(dim: usize) -> Vec<[u32; BITS]> {
     let rows = joe_kuo_rows();
-    assert!(dim <= rows.len() + 1, "Sobol' dimension {dim} beyond the table");
+    assert!(
+        dim <= rows.len() + 1,
+        "Sobol' dimension {dim} beyond the table"
+    );
     let mut out = Vec::with_capacity(dim);
     let mut first = [0u32; BITS];
     for (i, v) in first.iter_mut().enumerate() {
@@ -345,7 +348,11 @@ mod tests {
         ];
         for (n, row) in expected.iter().enumerate() {
             for (d, x) in row.iter().enumerate() {
-                assert_eq!(s.point_bits(n as u64, d) as f64 / 4_294_967_296.0, *x, "n={n} d={d}");
+                assert_eq!(
+                    s.point_bits(n as u64, d) as f64 / 4_294_967_296.0,
+                    *x,
+                    "n={n} d={d}"
+                );
             }
         }
     }
