@@ -194,7 +194,8 @@ pub enum Source {
 }
 
 impl Source {
-    /// The tolerance.
+    /// The magnitude: the tolerance of a position-independent error, the peak |value| of the
+    /// model of an axis-dependent one (mm or rad).
     pub fn tolerance(&self) -> f64 {
         match self {
             Source::Varying { tolerance, .. } | Source::Constant { tolerance } => *tolerance,
