@@ -1,157 +1,91 @@
 //! Sobol' low-discrepancy sequence (Gray-code order) with Matoušek linear matrix scrambling and a
 //! random digital shift.
 //!
-//! Direction numbers: the primitive polynomials are enumerated here, in the order of Joe & Kuo's
-//! `new-joe-kuo-6.21201` file (by degree, then by the coefficient word `a`). The initial direction
-//! numbers mᵢ of dimensions 2–21 are those of that file as we know them; beyond dimension 21 they
-//! are fixed odd integers mᵢ < 2ⁱ drawn from a SplitMix64 stream (any odd choice gives a valid
-//! Sobol' sequence: every one-dimensional projection is a (0, m, 1)-net; Joe–Kuo's choice further
-//! optimises two-dimensional projections). Randomised QMC estimates stay unbiased either way.
+//! Direction numbers: the published table of Joe & Kuo, `new-joe-kuo-6.21201` (S. Joe and
+//! F. Y. Kuo, "Constructing Sobol sequences with better two-dimensional projections", SIAM J. Sci.
+//! Comput. 30, 2635–2654, 2008; <https://web.maths.unsw.edu.au/~fkuo/sobol/>), its first 1000
+//! dimensions, embedded as `data/new-joe-kuo-6.1000.txt`. That file is the copy Apache Commons Math
+//! ships (`src/main/resources/assets/org/apache/commons/math4/random/new-joe-kuo-6.1000`),
+//! reformatted to single spaces; every row was checked equal to the table SciPy 1.17 ships
+//! (`scipy/stats/_sobol_direction_numbers.npz`, same source). Columns: dimension d, degree s,
+//! coefficient word a of the primitive polynomial, initial direction numbers m₁…m_s.
 
 use crate::error::{Error, Result};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
-/// Largest supported dimension.
-pub const MAX_DIM: usize = 1100;
+/// Largest supported dimension (the embedded Joe–Kuo table ends at dimension 1000).
+pub const MAX_DIM: usize = 1000;
 const BITS: usize = 32;
 
-/// (degree s, coefficient word a, initial m₁…m_s) for dimensions 2–21 (new-joe-kuo-6.21201).
-const JOE_KUO_HEAD: [(u32, u32, &[u32]); 20] = [
-    (1, 0, &[1]),
-    (2, 1, &[1, 3]),
-    (3, 1, &[1, 3, 1]),
-    (3, 2, &[1, 1, 1]),
-    (4, 1, &[1, 1, 3, 3]),
-    (4, 4, &[1, 3, 5, 13]),
-    (5, 2, &[1, 1, 5, 5, 17]),
-    (5, 4, &[1, 1, 5, 5, 5]),
-    (5, 7, &[1, 1, 7, 11, 19]),
-    (5, 11, &[1, 1, 5, 1, 1]),
-    (5, 13, &[1, 1, 1, 3, 11]),
-    (5, 14, &[1, 3, 5, 5, 31]),
-    (6, 1, &[1, 3, 3, 9, 7, 49]),
-    (6, 13, &[1, 1, 1, 15, 21, 21]),
-    (6, 16, &[1, 3, 1, 13, 27, 49]),
-    (6, 19, &[1, 1, 1, 15, 7, 5]),
-    (6, 22, &[1, 3, 1, 15, 13, 25]),
-    (6, 25, &[1, 1, 5, 5, 19, 61]),
-    (7, 1, &[1, 3, 7, 11, 23, 15, 103]),
-    (7, 4, &[1, 3, 7, 13, 13, 15, 69]),
-];
+/// The first 1000 dimensions of `new-joe-kuo-6.21201` (header line, then `d s a m_1 … m_s`).
+const JOE_KUO_TABLE: &str = include_str!("../data/new-joe-kuo-6.1000.txt");
 
-/// GF(2) polynomial product modulo `p` (degree `s`), bit i = coefficient of xⁱ.
-fn mulmod(a: u64, b: u64, p: u64, s: u32) -> u64 {
-    let mut r = 0u64;
-    let mut a = a;
-    let mut b = b;
-    while b != 0 {
-        if b & 1 == 1 {
-            r ^= a;
-        }
-        b >>= 1;
-        a <<= 1;
-        if a >> s & 1 == 1 {
-            a ^= p;
-        }
-    }
-    r
+/// One row of the Joe–Kuo table: degree s, coefficient word a, initial direction numbers m₁…m_s.
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct JoeKuoRow {
+    pub(crate) degree: u32,
+    pub(crate) a: u32,
+    pub(crate) m: Vec<u32>,
 }
 
-fn powmod(e: u64, p: u64, s: u32) -> u64 {
-    let (mut base, mut e, mut r) = (2u64, e, 1u64); // base = x
-    while e > 0 {
-        if e & 1 == 1 {
-            r = mulmod(r, base, p, s);
-        }
-        base = mulmod(base, base, p, s);
-        e >>= 1;
-    }
-    r
-}
-
-/// Whether the degree-s polynomial with bit pattern `p` is primitive over GF(2).
-pub(crate) fn is_primitive(p: u64, s: u32) -> bool {
-    if s == 1 {
-        return p == 0b11;
-    }
-    let order = (1u64 << s) - 1;
-    if powmod(order, p, s) != 1 {
-        return false;
-    }
-    let mut n = order;
-    let mut q = 2;
-    let mut factors = vec![];
-    while q * q <= n {
-        if n % q == 0 {
-            factors.push(q);
-            while n % q == 0 {
-                n /= q;
-            }
-        }
-        q += 1;
-    }
-    if n > 1 {
-        factors.push(n);
-    }
-    factors.iter().all(|&f| powmod(order / f, p, s) != 1)
-}
-
-/// (degree, a) of the primitive polynomials for dimensions 2, 3, … (Joe–Kuo order).
-pub(crate) fn primitive_polynomials(count: usize) -> Vec<(u32, u32)> {
-    let mut out = Vec::with_capacity(count);
-    let mut s = 1u32;
-    while out.len() < count {
-        for a in 0..(1u32 << (s - 1)) {
-            let p = (1u64 << s) | ((a as u64) << 1) | 1;
-            if is_primitive(p, s) {
-                out.push((s, a));
-                if out.len() == count {
-                    break;
+/// The parsed table, dimensions 2…[`MAX_DIM`] in order (parsed once, on first use).
+pub(crate) fn joe_kuo_rows() -> &'static [JoeKuoRow] {
+    static ROWS: std::sync::OnceLock<Vec<JoeKuoRow>> = std::sync::OnceLock::new();
+    ROWS.get_or_init(|| {
+        JOE_KUO_TABLE
+            .lines()
+            .skip(1)
+            .filter(|l| !l.trim().is_empty())
+            .enumerate()
+            .map(|(row, line)| {
+                let f: Vec<u32> = line
+                    .split_whitespace()
+                    .map(|t| t.parse().expect("embedded Joe–Kuo table: integer field"))
+                    .collect();
+                assert!(
+                    f.len() >= 4 && f[0] as usize == row + 2 && f.len() == 3 + f[1] as usize,
+                    "embedded Joe–Kuo table: malformed row {line:?}"
+                );
+                JoeKuoRow {
+                    degree: f[1],
+                    a: f[2],
+                    m: f[3..].to_vec(),
                 }
-            }
-        }
-        s += 1;
-    }
-    out
+            })
+            .collect()
+    })
 }
 
-/// Unscrambled direction numbers V[d][i] = mᵢ·2^{32−i} (i = 1…32) for dimensions 0…dim−1.
+/// Unscrambled direction numbers V[d][i] = mᵢ·2^{32−i} (i = 1…32) for dimensions 0…dim−1: the
+/// van der Corput sequence in dimension 0, the Joe–Kuo rows beyond, with the recurrence
+/// mᵢ = 2a₁mᵢ₋₁ ⊕ 2²a₂mᵢ₋₂ ⊕ … ⊕ 2^{s−1}a_{s−1}mᵢ₋ₛ₊₁ ⊕ 2ˢmᵢ₋ₛ ⊕ mᵢ₋ₛ (Bratley & Fox).
+///
+/// # Panics
+/// If `dim > MAX_DIM` (callers check).
 pub(crate) fn direction_numbers(dim: usize) -> Vec<[u32; BITS]> {
-    let polys = primitive_polynomials(dim.saturating_sub(1));
-    let mut sm = 0x9E37_79B9_7F4A_7C15u64;
-    let mut splitmix = move || {
-        sm = sm.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = sm;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    };
+    let rows = joe_kuo_rows();
+    assert!(
+        dim <= rows.len() + 1,
+        "Sobol' dimension {dim} beyond the table"
+    );
     let mut out = Vec::with_capacity(dim);
     let mut first = [0u32; BITS];
     for (i, v) in first.iter_mut().enumerate() {
         *v = 1u32 << (BITS - 1 - i);
     }
     out.push(first);
-    for d in 1..dim {
-        let (s, a) = polys[d - 1];
-        let s = s as usize;
+    for row in rows.iter().take(dim.saturating_sub(1)) {
+        let s = row.degree as usize;
+        let a = row.a as u64;
         let mut m = vec![0u64; BITS + 1];
-        if d <= JOE_KUO_HEAD.len() {
-            let (_, _, init) = JOE_KUO_HEAD[d - 1];
-            for (i, &mi) in init.iter().enumerate() {
-                m[i + 1] = mi as u64;
-            }
-        } else {
-            for (i, slot) in m.iter_mut().enumerate().take(s + 1).skip(1) {
-                *slot = (splitmix() % (1u64 << i)) | 1;
-            }
+        for (i, &mi) in row.m.iter().enumerate() {
+            m[i + 1] = mi as u64;
         }
         for i in (s + 1)..=BITS {
             let mut v = m[i - s] ^ (m[i - s] << s);
             for kk in 1..s {
-                let ak = (a >> (s - 1 - kk)) & 1;
-                if ak == 1 {
+                if (a >> (s - 1 - kk)) & 1 == 1 {
                     v ^= m[i - kk] << kk;
                 }
             }
@@ -276,16 +210,108 @@ impl SobolSequence {
 mod tests {
     use super::*;
 
-    #[test]
-    fn polynomials_match_joe_kuo_order() {
-        let p = primitive_polynomials(20);
-        for (d, (s, a, m)) in JOE_KUO_HEAD.iter().enumerate() {
-            assert_eq!(p[d], (*s, *a), "dimension {}", d + 2);
-            assert_eq!(m.len(), *s as usize);
-            for (i, mi) in m.iter().enumerate() {
-                assert!(mi % 2 == 1 && *mi < 1 << (i + 1));
+    /// GF(2) polynomial product modulo `p` (degree `s`), bit i = coefficient of xⁱ.
+    fn mulmod(a: u64, b: u64, p: u64, s: u32) -> u64 {
+        let mut r = 0u64;
+        let mut a = a;
+        let mut b = b;
+        while b != 0 {
+            if b & 1 == 1 {
+                r ^= a;
+            }
+            b >>= 1;
+            a <<= 1;
+            if a >> s & 1 == 1 {
+                a ^= p;
             }
         }
+        r
+    }
+
+    fn powmod(e: u64, p: u64, s: u32) -> u64 {
+        let (mut base, mut e, mut r) = (2u64, e, 1u64); // base = x
+        while e > 0 {
+            if e & 1 == 1 {
+                r = mulmod(r, base, p, s);
+            }
+            base = mulmod(base, base, p, s);
+            e >>= 1;
+        }
+        r
+    }
+
+    /// Whether the degree-s polynomial with bit pattern `p` is primitive over GF(2).
+    fn is_primitive(p: u64, s: u32) -> bool {
+        if s == 1 {
+            return p == 0b11;
+        }
+        let order = (1u64 << s) - 1;
+        if powmod(order, p, s) != 1 {
+            return false;
+        }
+        let mut n = order;
+        let mut q = 2;
+        let mut factors = vec![];
+        while q * q <= n {
+            if n % q == 0 {
+                factors.push(q);
+                while n % q == 0 {
+                    n /= q;
+                }
+            }
+            q += 1;
+        }
+        if n > 1 {
+            factors.push(n);
+        }
+        factors.iter().all(|&f| powmod(order / f, p, s) != 1)
+    }
+
+    /// (degree, a) of the primitive polynomials for dimensions 2, 3, … (Joe–Kuo order): an
+    /// independent enumeration the table's polynomial column is checked against.
+    fn primitive_polynomials(count: usize) -> Vec<(u32, u32)> {
+        let mut out = Vec::with_capacity(count);
+        let mut s = 1u32;
+        while out.len() < count {
+            for a in 0..(1u32 << (s - 1)) {
+                let p = (1u64 << s) | ((a as u64) << 1) | 1;
+                if is_primitive(p, s) {
+                    out.push((s, a));
+                    if out.len() == count {
+                        break;
+                    }
+                }
+            }
+            s += 1;
+        }
+        out
+    }
+
+    #[test]
+    fn polynomials_match_joe_kuo_order() {
+        // The table's polynomial column equals an independent enumeration of the primitive
+        // polynomials (by degree, then coefficient word), and every initial mᵢ is odd and < 2ⁱ.
+        let rows = joe_kuo_rows();
+        assert_eq!(rows.len(), MAX_DIM - 1);
+        let p = primitive_polynomials(rows.len());
+        for (d, row) in rows.iter().enumerate() {
+            assert_eq!(p[d], (row.degree, row.a), "dimension {}", d + 2);
+            assert_eq!(row.m.len(), row.degree as usize);
+            for (i, mi) in row.m.iter().enumerate() {
+                assert!(mi % 2 == 1 && *mi < 1 << (i + 1), "dimension {}", d + 2);
+            }
+        }
+        // Spot rows of new-joe-kuo-6.21201 (dimensions 2, 21, 1000 of the published file).
+        assert_eq!(rows[0].m, [1]);
+        assert_eq!(rows[19].m, [1, 3, 7, 13, 13, 15, 69]);
+        assert_eq!(
+            rows[998],
+            JoeKuoRow {
+                degree: 13,
+                a: 3396,
+                m: vec![1, 1, 3, 9, 3, 3, 105, 201, 373, 877, 919, 1263, 6649]
+            }
+        );
         // number of primitive polynomials of degree s is φ(2^s − 1)/s: 1,1,2,2,6,6,18,16,48,60
         let all = primitive_polynomials(160);
         for (s, cnt) in [
@@ -306,14 +332,62 @@ mod tests {
 
     #[test]
     fn first_points_match_the_known_sequence() {
-        // Unscrambled Sobol' points, dimensions 1–2 (e.g. scipy.stats.qmc.Sobol(scramble=False)).
-        let s = SobolSequence::new(2).unwrap();
-        let d1 = [0.0, 0.5, 0.75, 0.25, 0.375, 0.875, 0.625, 0.125];
-        let d2 = [0.0, 0.5, 0.25, 0.75, 0.375, 0.875, 0.125, 0.625];
-        for n in 0..8 {
-            assert_eq!(s.point_bits(n, 0) as f64 / 4_294_967_296.0, d1[n as usize]);
-            assert_eq!(s.point_bits(n, 1) as f64 / 4_294_967_296.0, d2[n as usize]);
+        // Unscrambled Sobol' points 0…8, dimensions 1–3 (Bratley & Fox; the same values from
+        // scipy.stats.qmc.Sobol(d=3, scramble=False).random(9)).
+        let s = SobolSequence::new(3).unwrap();
+        let expected = [
+            [0.0, 0.0, 0.0],
+            [0.5, 0.5, 0.5],
+            [0.75, 0.25, 0.25],
+            [0.25, 0.75, 0.75],
+            [0.375, 0.375, 0.625],
+            [0.875, 0.875, 0.125],
+            [0.625, 0.125, 0.875],
+            [0.125, 0.625, 0.375],
+            [0.1875, 0.3125, 0.9375],
+        ];
+        for (n, row) in expected.iter().enumerate() {
+            for (d, x) in row.iter().enumerate() {
+                assert_eq!(
+                    s.point_bits(n as u64, d) as f64 / 4_294_967_296.0,
+                    *x,
+                    "n={n} d={d}"
+                );
+            }
         }
+    }
+
+    /// The whole table against SciPy 1.17, which ships the same Joe–Kuo numbers: points of
+    /// `qmc.Sobol(d=1000, scramble=False, bits=32).random(4096)` times 2³², spot values and the
+    /// checksum Σₙ Σ_d bits(n, d)·(n + 1)·(d + 1) mod 2⁶⁴ over all 4096 × 1000 coordinates
+    /// (computed there with Python integers).
+    #[test]
+    fn unscrambled_points_match_scipy() {
+        let s = SobolSequence::new(MAX_DIM).unwrap();
+        for (n, d, bits) in [
+            (5u64, 20usize, 2_684_354_560u32),
+            (7, 83, 2_684_354_560),
+            (100, 500, 771_751_936),
+            (1000, 999, 859_832_320),
+            (1023, 41, 4_181_721_088),
+            (37, 998, 1_811_939_328),
+            (4095, 1, 4_042_260_480),
+            (4095, 2, 1_435_500_544),
+            (4095, 99, 4_134_535_168),
+            (4095, 499, 4_031_774_720),
+            (4095, 998, 3_647_995_904),
+            (4095, 999, 1_324_351_488),
+        ] {
+            assert_eq!(s.point_bits(n, d), bits, "n={n} d={d}");
+        }
+        let mut sum = 0u64;
+        for n in 0..4096u64 {
+            for d in 0..MAX_DIM {
+                let w = (n + 1).wrapping_mul(d as u64 + 1);
+                sum = sum.wrapping_add((s.point_bits(n, d) as u64).wrapping_mul(w));
+            }
+        }
+        assert_eq!(sum, 0xe3c5_753b_0000_0000);
     }
 
     /// Every one-dimensional projection of the first 2^m points is a (0, m, 1)-net: exactly one
@@ -340,32 +414,38 @@ mod tests {
     }
 
     /// Two-dimensional projections are balanced: 2^m points in 2^a × 2^b boxes (a + b ≤ m − t) hold
-    /// equal counts. Checked with 4 × 4 boxes (first 12 dimensions) and 2 × 2 boxes (first
-    /// 21) for 256 points (Joe–Kuo initial values). Beyond dimension 21 our initial values are not
-    /// optimised for 2-D projections, so no such claim is made there.
+    /// equal counts, and scrambling preserves it. For the first 256 points of the Joe–Kuo table:
+    /// 2 × 2 boxes in all pairs of the first 84 dimensions (a Saltelli design with k = 41), 4 × 4
+    /// boxes in all pairs of the first 18 (dimensions 0 and 26 are the first pair that is not;
+    /// both limits read off `scipy.stats.qmc.Sobol(d=84, scramble=False).random(256)`).
     #[test]
     fn two_dimensional_projections_balanced() {
-        let dim = 82;
+        let dim = 84;
         let seq = SobolSequence::scrambled(dim, 3).unwrap();
         let n = 256;
         let mut pts = vec![0.0; n * dim];
         seq.fill(0, n, &mut pts);
-        for (boxes, upto) in [(4usize, 12usize), (2, 21)] {
+        let balanced = |boxes: usize, i: usize, j: usize| {
+            let mut cnt = vec![0usize; boxes * boxes];
+            for r in 0..n {
+                let a = (pts[r * dim + i] * boxes as f64) as usize;
+                let b = (pts[r * dim + j] * boxes as f64) as usize;
+                cnt[a * boxes + b] += 1;
+            }
+            cnt.iter().all(|&c| c == n / (boxes * boxes))
+        };
+        for (boxes, upto) in [(4usize, 18usize), (2, 84)] {
             for i in 0..upto {
                 for j in (i + 1)..upto {
-                    let mut cnt = vec![0usize; boxes * boxes];
-                    for r in 0..n {
-                        let a = (pts[r * dim + i] * boxes as f64) as usize;
-                        let b = (pts[r * dim + j] * boxes as f64) as usize;
-                        cnt[a * boxes + b] += 1;
-                    }
                     assert!(
-                        cnt.iter().all(|&c| c == n / (boxes * boxes)),
-                        "dims {i},{j}: {cnt:?}"
+                        balanced(boxes, i, j),
+                        "dims {i},{j}, {boxes} × {boxes} boxes"
                     );
                 }
             }
         }
+        // The check discriminates: the first pair SciPy shows unbalanced in 4 × 4 boxes.
+        assert!(!balanced(4, 0, 26));
     }
 
     #[test]
