@@ -345,7 +345,10 @@ const COL_CHUNK: usize = 512;
 
 /// Candidates whose Gram columns are computed ahead, per path, whenever a path needs one that is
 /// not cached (their values do not depend on when they are computed, only the time does).
-const PREFETCH: usize = 6;
+const PREFETCH: usize = 12;
+
+/// Columns per Gram product (fixed: see [`GramCache::fill`]).
+const GRAM_BATCH: usize = 32;
 
 /// Largest number of cached Gram columns (each holds folds + 1 vectors of P values).
 const CACHE_BYTES: usize = 256 << 20;
@@ -373,19 +376,24 @@ impl GramCache {
         self.cols.lock().expect("cache lock").contains_key(&j)
     }
 
-    /// Computes and stores the Gram columns of `want` (values independent of batching).
+    /// Computes and stores the Gram columns of `want`, in products of exactly [`GRAM_BATCH`]
+    /// columns (the last batch padded with repeats), so that a column's values do not depend on
+    /// which other columns share its product — nor on timing or thread count.
     fn fill(&self, d: &Design, want: &[usize], parallel: bool) {
-        let mut b = Mat::<f64>::zeros(d.n, want.len());
-        for (c, &j) in want.iter().enumerate() {
-            b.col_mut(c).copy_from(faer::ColRef::from_slice(d.col(j)));
-        }
-        let v = d.variant_products(b.as_ref(), parallel);
-        let mut map = self.cols.lock().expect("cache lock");
-        if map.len() + want.len() > self.capacity {
-            map.clear();
-        }
-        for (c, &j) in want.iter().enumerate() {
-            map.insert(j, Arc::new(v.iter().map(|var| var[c].clone()).collect()));
+        for batch in want.chunks(GRAM_BATCH) {
+            let mut b = Mat::<f64>::zeros(d.n, GRAM_BATCH);
+            for c in 0..GRAM_BATCH {
+                let j = batch[c.min(batch.len() - 1)];
+                b.col_mut(c).copy_from(faer::ColRef::from_slice(d.col(j)));
+            }
+            let v = d.variant_products(b.as_ref(), parallel);
+            let mut map = self.cols.lock().expect("cache lock");
+            if map.len() + batch.len() > self.capacity {
+                map.clear();
+            }
+            for (c, &j) in batch.iter().enumerate() {
+                map.insert(j, Arc::new(v.iter().map(|var| var[c].clone()).collect()));
+            }
         }
     }
 }
