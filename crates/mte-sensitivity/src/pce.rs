@@ -444,26 +444,23 @@ struct Path {
 }
 
 impl Path {
-    /// Path of row variant `variant` (0: all rows; f + 1: all but fold f); `c0` = Ψ_vᵀy.
+    /// Path of row variant `variant` (0: all rows; f + 1: all but fold f); `c0` = Ψ_vᵀy,
+    /// `norm2` the squared column norms over the variant's rows.
     fn new(
         d: &Design,
         y: &[f64],
         variant: usize,
         kmax: usize,
-        col_norm2: &[f64],
+        norm2: Vec<f64>,
         c0: Vec<f64>,
     ) -> Self {
         let n = y.len();
         let mut mask = vec![1.0; n];
         let mut hold = vec![];
-        let mut norm2 = col_norm2.to_vec();
         if variant > 0 {
             let (r0, len) = d.segs[variant - 1];
             hold.extend(r0..r0 + len);
             mask[r0..r0 + len].fill(0.0);
-            for (j, v) in norm2.iter_mut().enumerate() {
-                *v -= d.col(j)[r0..r0 + len].iter().map(|x| x * x).sum::<f64>();
-            }
         }
         let n_train = n - hold.len();
         let resid: Vec<f64> = y.iter().zip(&mask).map(|(a, b)| a * b).collect();
@@ -708,11 +705,12 @@ struct Fit {
     crit: f64,
 }
 
-/// OMP with the selection rule on one output; `c0[v]` = Ψ_vᵀy for each row variant v.
+/// OMP with the selection rule on one output; `c0[v]` = Ψ_vᵀy and `col_norm2[v]` the squared
+/// column norms for each row variant v.
 fn omp_select(
     d: &Design,
     cache: &GramCache,
-    col_norm2: &[f64],
+    col_norm2: &[Vec<f64>],
     y: &[f64],
     c0: Vec<Vec<f64>>,
     kmax_user: usize,
@@ -726,7 +724,7 @@ fn omp_select(
         .enumerate()
         .map(|(v, c)| {
             let nt = if v == 0 { n } else { n - d.segs[v - 1].1 };
-            Path::new(d, y, v, kmax(nt), col_norm2, c)
+            Path::new(d, y, v, kmax(nt), col_norm2[v].clone(), c)
         })
         .collect();
     loop {
@@ -1073,9 +1071,28 @@ pub fn fit_pce(
         let basis = multi_indices(k, deg, params.q_norm);
         n_candidates = basis.len();
         let design = Design::new(&xi, n, k, &germs, deg, &basis, segs.clone());
-        let col_norm2: Vec<f64> = (0..design.p)
+        let full_norm2: Vec<f64> = (0..design.p)
+            .into_par_iter()
             .map(|j| design.col(j).iter().map(|v| v * v).sum())
             .collect();
+        // Squared column norms of every row variant (all rows; all but fold f), for all outputs.
+        let mut col_norm2 = vec![full_norm2.clone()];
+        if design.segs.len() > 1 {
+            for &(r0, len) in &design.segs {
+                col_norm2.push(
+                    (0..design.p)
+                        .into_par_iter()
+                        .map(|j| {
+                            full_norm2[j]
+                                - design.col(j)[r0..r0 + len]
+                                    .iter()
+                                    .map(|x| x * x)
+                                    .sum::<f64>()
+                        })
+                        .collect(),
+                );
+            }
+        }
         // Ψ_vᵀy of every output and row variant, in one product per fold.
         let c0 = design.variant_products(ymat.as_ref(), true);
         let mut c0_by_output: Vec<Vec<Vec<f64>>> = (0..m).map(|_| vec![]).collect();
