@@ -62,7 +62,7 @@ fn batch_evaluation_matches_row_by_row() {
     let mut batch = vec![0.0; 3 * 12];
     lin.evaluate_batch(3, &xs, &mut batch);
     for r in 0..3 {
-        let mut y = vec![0.0; 12];
+        let mut y = [0.0; 12];
         // one input at a time, summed: the model is linear
         for i in 0..k {
             let mut x = vec![0.0; k];
