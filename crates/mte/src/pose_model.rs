@@ -8,7 +8,7 @@
 use mte_errors::Catalogue;
 use mte_kinematics::Machine;
 use mte_linalg::DMat;
-use mte_linalg::nalgebra::DMatrixView;
+use mte_linalg::nalgebra::{DMatrixView, DMatrixViewMut};
 use mte_sensitivity::Model;
 
 /// How the pose error is computed from the slot errors.
@@ -139,8 +139,8 @@ impl Model for PoseErrorModel {
             Linearisation::FirstOrder => {
                 // Yᵀ (m × n column-major, i.e. Y row-major) = E · Xᵀ
                 let xt = DMatrixView::from_slice(xs, k, n_rows);
-                let yt = &self.effect * xt;
-                ys.copy_from_slice(yt.as_slice());
+                let mut yt = DMatrixViewMut::from_slice(ys, m, n_rows);
+                yt.gemm(1.0, &self.effect, &xt, 0.0);
             }
             Linearisation::Exact => {
                 let mut e = vec![0.0; self.machine.n_slots()];
