@@ -11,9 +11,12 @@
 //! (default: each fold runs its own path on its training rows, the error on the held-out rows is
 //! averaged over folds at each path length, the size with the smallest error is refitted on all
 //! runs) or by the corrected leave-one-out error (Blatman & Sudret 2011:
-//! LOO·n/(n − p)·(1 + tr(C⁻¹)/n), C = Ψ_AᵀΨ_A/n). All paths advance in lockstep so that the
-//! correlations of every path come from one matrix product Ψᵀ[r₀ … r_K] per step. The degree is
-//! chosen the same way when `adaptive_degree` is on (degrees 1 … p, stop when the error grows).
+//! LOO·n/(n − p)·(1 + tr(C⁻¹)/n), C = Ψ_AᵀΨ_A/n). One seeded fold partition serves every
+//! output. The correlations Ψ_vᵀr of each path (row variant v: all rows, or all but one fold) are
+//! updated after each step from the Gram columns Ψ_vᵀψ_a of the chosen candidate, cached and
+//! shared by all paths and outputs of one design (computed in products of a fixed width, so
+//! values do not depend on timing or thread count). The degree is chosen the same way when
+//! `adaptive_degree` is on (degrees 1 … p, stop when the error grows).
 //!
 //! Sobol' indices from the coefficients (Sudret 2008): V = Σ_{α≠0} c_α², Sᵢ = Σ_{α: only i} c_α²/V,
 //! S_Tᵢ = Σ_{α ∋ i} c_α²/V, S_ij = Σ_{α: exactly {i, j}} c_α²/V.
@@ -66,7 +69,7 @@ pub struct PceParams {
     pub n_bootstrap: usize,
     /// Confidence level of the intervals.
     pub confidence: f64,
-    /// Seed (fold assignment, bootstrap, and the design in [`build_pce`]).
+    /// Seed (fold assignment, one for all outputs; bootstrap; the design in [`build_pce`]).
     pub seed: u64,
     /// Number of model runs for [`build_pce`].
     pub n_samples: usize,
