@@ -1,4 +1,5 @@
-//! `cargo xtask reproduce [seed000|seed002|seed003|seed004|all] [--check]` and
+//! `cargo xtask reproduce [seed000|seed002|seed003|seed004|all] [--check]`,
+//! `cargo xtask reproduce seed003 --timing` (writes `docs/reproduction/seed003-timing.md`) and
 //! `cargo xtask bench [-- criterion args]`.
 //!
 //! The generators are in the library target (`xtask::reproduce`), so the staleness test in
@@ -7,7 +8,7 @@
 use std::process::{Command, ExitCode};
 use xtask::reproduce::{self, Freshness, PAPERS};
 
-const USAGE: &str = "usage: cargo xtask <reproduce [seed000|seed002|seed003|seed004|all] [--check] | bench [-- criterion args]>";
+const USAGE: &str = "usage: cargo xtask <reproduce [seed000|seed002|seed003|seed004|all] [--check] | reproduce seed003 --timing | bench [-- criterion args]>";
 
 fn main() -> ExitCode {
     let args: Vec<String> = std::env::args().skip(1).collect();
@@ -27,6 +28,14 @@ fn main() -> ExitCode {
 
 fn run_reproduce(args: &[String]) -> Result<(), String> {
     let check = args.iter().any(|a| a == "--check");
+    if args.iter().any(|a| a == "--timing") {
+        // Wall-clock times are not deterministic: a separate page the staleness test ignores.
+        let text = reproduce::seed003::timing().map_err(|e| e.to_string())?;
+        let path = reproduce::workspace_root().join("docs/reproduction/seed003-timing.md");
+        std::fs::write(&path, text).map_err(|e| format!("{}: {e}", path.display()))?;
+        println!("wrote {}", path.display());
+        return Ok(());
+    }
     let names: Vec<&str> = args
         .iter()
         .map(String::as_str)

@@ -11,9 +11,12 @@
 //! (default: each fold runs its own path on its training rows, the error on the held-out rows is
 //! averaged over folds at each path length, the size with the smallest error is refitted on all
 //! runs) or by the corrected leave-one-out error (Blatman & Sudret 2011:
-//! LOO·n/(n − p)·(1 + tr(C⁻¹)/n), C = Ψ_AᵀΨ_A/n). All paths advance in lockstep so that the
-//! correlations of every path come from one matrix product Ψᵀ[r₀ … r_K] per step. The degree is
-//! chosen the same way when `adaptive_degree` is on (degrees 1 … p, stop when the error grows).
+//! LOO·n/(n − p)·(1 + tr(C⁻¹)/n), C = Ψ_AᵀΨ_A/n). One seeded fold partition serves every
+//! output. The correlations Ψ_vᵀr of each path (row variant v: all rows, or all but one fold) are
+//! updated after each step from the Gram columns Ψ_vᵀψ_a of the chosen candidate, cached and
+//! shared by all paths and outputs of one design (computed in products of a fixed width, so
+//! values do not depend on timing or thread count). The degree is chosen the same way when
+//! `adaptive_degree` is on (degrees 1 … p, stop when the error grows).
 //!
 //! Sobol' indices from the coefficients (Sudret 2008): V = Σ_{α≠0} c_α², Sᵢ = Σ_{α: only i} c_α²/V,
 //! S_Tᵢ = Σ_{α ∋ i} c_α²/V, S_ij = Σ_{α: exactly {i, j}} c_α²/V.
@@ -23,11 +26,13 @@ use crate::dist::{Germ, Problem};
 use crate::error::{Error, Result};
 use crate::model::{Model, eval_checked};
 use crate::stats::{interval, stream};
-use faer::{Accum, Mat, Par};
+use faer::{Accum, Mat, MatRef, Par};
 use rand::Rng;
 use rand::seq::SliceRandom;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
+use std::collections::HashMap;
+use std::sync::{Arc, Mutex};
 
 /// One multivariate basis term: (input index, degree) pairs with degree ≥ 1; empty = constant.
 pub type MultiIndex = Vec<(u32, u32)>;
@@ -64,7 +69,7 @@ pub struct PceParams {
     pub n_bootstrap: usize,
     /// Confidence level of the intervals.
     pub confidence: f64,
-    /// Seed (fold assignment, bootstrap, and the design in [`build_pce`]).
+    /// Seed (fold assignment, one for all outputs; bootstrap; the design in [`build_pce`]).
     pub seed: u64,
     /// Number of model runs for [`build_pce`].
     pub n_samples: usize,
@@ -212,82 +217,188 @@ pub fn univariate(germ: Germ, xi: f64, p: usize, out: &mut [f64]) {
     }
 }
 
-/// Design matrix Ψ (n × P, column-major) of the candidates at germ points `xi` (n × k row-major).
-fn design_matrix(
-    xi: &[f64],
+/// Design matrix Ψ (n × P) stored column-major, rows grouped fold by fold so that every fold's
+/// held-out rows are one contiguous segment of each column.
+struct Design {
     n: usize,
-    k: usize,
-    germs: &[Germ],
     p: usize,
-    basis: &[MultiIndex],
-) -> Mat<f64> {
-    let mut uni = vec![0.0; n * k * (p + 1)];
-    for r in 0..n {
-        for j in 0..k {
-            let o = (r * k + j) * (p + 1);
-            univariate(germs[j], xi[r * k + j], p, &mut uni[o..o + p + 1]);
-        }
-    }
-    let mut psi = Mat::<f64>::zeros(n, basis.len());
-    let cols: Vec<(usize, &MultiIndex)> = basis.iter().enumerate().collect();
-    let ncols = basis.len();
-    // Fill columns in parallel (each column is independent).
-    let data: Vec<Vec<f64>> = cols
-        .par_iter()
-        .map(|(_, a)| {
-            (0..n)
-                .map(|r| {
-                    a.iter()
-                        .map(|&(v, d)| uni[(r * k + v as usize) * (p + 1) + d as usize])
-                        .product::<f64>()
-                })
-                .collect()
-        })
-        .collect();
-    for c in 0..ncols {
+    data: Vec<f64>,
+    /// Row ranges (start, len) of the folds (one range over all rows without folds).
+    segs: Vec<(usize, usize)>,
+}
+
+impl Design {
+    /// Ψ of the candidates at germ points `xi` (n × k row-major, already in fold order).
+    fn new(
+        xi: &[f64],
+        n: usize,
+        k: usize,
+        germs: &[Germ],
+        deg: usize,
+        basis: &[MultiIndex],
+        segs: Vec<(usize, usize)>,
+    ) -> Design {
+        let w = deg + 1;
+        let mut uni = vec![0.0; n * k * w];
         for r in 0..n {
-            psi[(r, c)] = data[c][r];
+            for j in 0..k {
+                let o = (r * k + j) * w;
+                univariate(germs[j], xi[r * k + j], deg, &mut uni[o..o + w]);
+            }
+        }
+        let mut data = vec![0.0; n * basis.len()];
+        // Each column is independent: fill them in parallel, straight into place.
+        data.par_chunks_mut(n)
+            .zip(basis.par_iter())
+            .for_each(|(col, a)| {
+                for (r, v) in col.iter_mut().enumerate() {
+                    *v = a
+                        .iter()
+                        .map(|&(var, d)| uni[(r * k + var as usize) * w + d as usize])
+                        .product::<f64>();
+                }
+            });
+        Design {
+            n,
+            p: basis.len(),
+            data,
+            segs,
         }
     }
-    psi
+
+    fn col(&self, j: usize) -> &[f64] {
+        &self.data[j * self.n..(j + 1) * self.n]
+    }
+
+    fn mat(&self) -> MatRef<'_, f64> {
+        MatRef::from_column_major_slice(&self.data, self.n, self.p)
+    }
+
+    /// Ψ[rows]ᵀ·B for one row segment, computed in fixed column chunks (thread-count
+    /// independent). `b` holds the segment's rows of the right-hand sides.
+    fn seg_products(
+        &self,
+        (r0, len): (usize, usize),
+        b: MatRef<'_, f64>,
+        parallel: bool,
+    ) -> Mat<f64> {
+        let psi = self.mat().subrows(r0, len);
+        let chunks: Vec<usize> = (0..self.p).step_by(COL_CHUNK).collect();
+        let work = |&c0: &usize| {
+            let c1 = (c0 + COL_CHUNK).min(self.p);
+            let mut out = Mat::<f64>::zeros(c1 - c0, b.ncols());
+            faer::linalg::matmul::matmul(
+                out.as_mut(),
+                Accum::Replace,
+                psi.subcols(c0, c1 - c0).transpose(),
+                b,
+                1.0,
+                Par::Seq,
+            );
+            out
+        };
+        let parts: Vec<Mat<f64>> = if parallel {
+            chunks.par_iter().map(work).collect()
+        } else {
+            chunks.iter().map(work).collect()
+        };
+        let mut c = Mat::<f64>::zeros(self.p, b.ncols());
+        for (&c0, part) in chunks.iter().zip(&parts) {
+            c.as_mut()
+                .subrows_mut(c0, part.nrows())
+                .copy_from(part.as_ref());
+        }
+        c
+    }
+
+    /// Ψ_vᵀ·B for every variant v of the row set: v = 0 all rows, v = f + 1 all rows but fold
+    /// f (its training rows). `b` is n × r in the design's row order; returns [variant][rhs][P].
+    fn variant_products(&self, b: MatRef<'_, f64>, parallel: bool) -> Vec<Vec<Vec<f64>>> {
+        let r = b.ncols();
+        let holds: Vec<Mat<f64>> = self
+            .segs
+            .iter()
+            .map(|&(r0, len)| self.seg_products((r0, len), b.subrows(r0, len), parallel))
+            .collect();
+        let full: Vec<Vec<f64>> = (0..r)
+            .map(|c| {
+                (0..self.p)
+                    .map(|j| holds.iter().map(|h| h[(j, c)]).sum::<f64>())
+                    .collect()
+            })
+            .collect();
+        let mut out = vec![];
+        if self.segs.len() > 1 {
+            for h in &holds {
+                out.push(
+                    full.iter()
+                        .enumerate()
+                        .map(|(c, fc)| fc.iter().enumerate().map(|(j, v)| v - h[(j, c)]).collect())
+                        .collect(),
+                );
+            }
+        }
+        out.insert(0, full);
+        out
+    }
 }
 
 /// Fixed chunk of candidate columns per matrix product (keeps results thread-count independent).
 const COL_CHUNK: usize = 512;
 
-/// C = Ψᵀ R, computed in fixed column chunks.
-fn correlations(psi: &Mat<f64>, r: &Mat<f64>, parallel: bool) -> Mat<f64> {
-    let (n, p) = (psi.nrows(), psi.ncols());
-    let f = r.ncols();
-    let chunks: Vec<usize> = (0..p).step_by(COL_CHUNK).collect();
-    let work = |&c0: &usize| {
-        let c1 = (c0 + COL_CHUNK).min(p);
-        let mut out = Mat::<f64>::zeros(c1 - c0, f);
-        faer::linalg::matmul::matmul(
-            out.as_mut(),
-            Accum::Replace,
-            psi.as_ref().subcols(c0, c1 - c0).transpose(),
-            r.as_ref(),
-            1.0,
-            Par::Seq,
-        );
-        out
-    };
-    let parts: Vec<Mat<f64>> = if parallel {
-        chunks.par_iter().map(work).collect()
-    } else {
-        chunks.iter().map(work).collect()
-    };
-    let _ = n;
-    let mut c = Mat::<f64>::zeros(p, f);
-    for (ci, part) in chunks.iter().zip(parts) {
-        for j in 0..f {
-            for i in 0..part.nrows() {
-                c[(ci + i, j)] = part[(i, j)];
+/// Candidates whose Gram columns are computed ahead, per path, whenever a path needs one that is
+/// not cached (their values do not depend on when they are computed, only the time does).
+const PREFETCH: usize = 12;
+
+/// Columns per Gram product (fixed: see [`GramCache::fill`]).
+const GRAM_BATCH: usize = 32;
+
+/// Largest number of cached Gram columns (each holds folds + 1 vectors of P values).
+const CACHE_BYTES: usize = 256 << 20;
+
+/// Gram columns Ψ_vᵀψ_a of every row variant v, shared by all paths and outputs of one design.
+struct GramCache {
+    cols: Mutex<HashMap<usize, Arc<Vec<Vec<f64>>>>>,
+    capacity: usize,
+}
+
+impl GramCache {
+    fn new(d: &Design) -> GramCache {
+        let per = d.p * d.segs.len().max(1) * 8 + 1;
+        GramCache {
+            cols: Mutex::new(HashMap::new()),
+            capacity: (CACHE_BYTES / per).max(64),
+        }
+    }
+
+    fn get(&self, j: usize) -> Option<Arc<Vec<Vec<f64>>>> {
+        self.cols.lock().expect("cache lock").get(&j).cloned()
+    }
+
+    fn has(&self, j: usize) -> bool {
+        self.cols.lock().expect("cache lock").contains_key(&j)
+    }
+
+    /// Computes and stores the Gram columns of `want`, in products of exactly [`GRAM_BATCH`]
+    /// columns (the last batch padded with repeats), so that a column's values do not depend on
+    /// which other columns share its product — nor on timing or thread count.
+    fn fill(&self, d: &Design, want: &[usize], parallel: bool) {
+        for batch in want.chunks(GRAM_BATCH) {
+            let mut b = Mat::<f64>::zeros(d.n, GRAM_BATCH);
+            for c in 0..GRAM_BATCH {
+                let j = batch[c.min(batch.len() - 1)];
+                b.col_mut(c).copy_from(faer::ColRef::from_slice(d.col(j)));
+            }
+            let v = d.variant_products(b.as_ref(), parallel);
+            let mut map = self.cols.lock().expect("cache lock");
+            if map.len() + batch.len() > self.capacity {
+                map.clear();
+            }
+            for (c, &j) in batch.iter().enumerate() {
+                map.insert(j, Arc::new(v.iter().map(|var| var[c].clone()).collect()));
             }
         }
     }
-    c
 }
 
 #[derive(Clone, Copy, PartialEq)]
@@ -296,20 +407,34 @@ enum Stop {
     Done,
 }
 
-/// One OMP path on a subset of rows (mask) of Ψ.
+/// A candidate chosen by a path, orthogonalised against its active set, awaiting its Gram column.
+struct Pending {
+    j: usize,
+    v: Vec<f64>,
+    rc: Vec<f64>,
+    rkk: f64,
+}
+
+/// One OMP path on a subset of rows (all rows, or all but one fold) of Ψ.
+///
+/// The correlations c = Ψ_vᵀ r of every candidate with the residual are kept up to date from
+/// Gram columns: with q_k = (ψ_a − Q r_c)/r_kk, Ψ_vᵀq_k = (Ψ_vᵀψ_a − U r_c)/r_kk where
+/// U = Ψ_vᵀQ, and c ← c − (q_kᵀr) Ψ_vᵀq_k — P·k work per step instead of P·n.
 struct Path {
+    variant: usize,
     mask: Vec<f64>,
     hold: Vec<usize>,
     norm2: Vec<f64>,
     excluded: Vec<bool>,
     active: Vec<usize>,
     q: Vec<Vec<f64>>,
-    rcols: Vec<Vec<f64>>,
     rinv: Vec<Vec<f64>>,
     rinv_f2: f64,
     qty: Vec<f64>,
     resid: Vec<f64>,
     h: Vec<f64>,
+    c: Vec<f64>,
+    u: Vec<f64>,
     n_train: usize,
     var_y: f64,
     y_norm2: f64,
@@ -322,14 +447,23 @@ struct Path {
 }
 
 impl Path {
-    fn new(psi: &Mat<f64>, y: &[f64], mask: Vec<f64>, kmax: usize, col_norm2: &[f64]) -> Self {
+    /// Path of row variant `variant` (0: all rows; f + 1: all but fold f); `c0` = Ψ_vᵀy,
+    /// `norm2` the squared column norms over the variant's rows.
+    fn new(
+        d: &Design,
+        y: &[f64],
+        variant: usize,
+        kmax: usize,
+        norm2: Vec<f64>,
+        c0: Vec<f64>,
+    ) -> Self {
         let n = y.len();
-        let hold: Vec<usize> = (0..n).filter(|&i| mask[i] == 0.0).collect();
-        let mut norm2 = col_norm2.to_vec();
-        for &i in &hold {
-            for (j, v) in norm2.iter_mut().enumerate() {
-                *v -= psi[(i, j)] * psi[(i, j)];
-            }
+        let mut mask = vec![1.0; n];
+        let mut hold = vec![];
+        if variant > 0 {
+            let (r0, len) = d.segs[variant - 1];
+            hold.extend(r0..r0 + len);
+            mask[r0..r0 + len].fill(0.0);
         }
         let n_train = n - hold.len();
         let resid: Vec<f64> = y.iter().zip(&mask).map(|(a, b)| a * b).collect();
@@ -343,18 +477,20 @@ impl Path {
         let y_norm2 = resid.iter().map(|v| v * v).sum();
         let excluded = norm2.iter().map(|&v| v <= 1e-300).collect();
         Path {
+            variant,
             mask,
             hold,
             norm2,
             excluded,
             active: vec![],
             q: vec![],
-            rcols: vec![],
             rinv: vec![],
             rinv_f2: 0.0,
             qty: vec![],
             resid,
             h: vec![0.0; n],
+            c: c0,
+            u: vec![],
             n_train,
             var_y,
             y_norm2,
@@ -373,17 +509,22 @@ impl Path {
             .collect()
     }
 
-    /// Adds the best candidate given correlations `c` (length P). Returns false when stopped.
-    fn step(&mut self, psi: &Mat<f64>, y: &[f64], c: &[f64], use_hold: bool) {
-        let n = y.len();
+    fn score(&self, j: usize) -> f64 {
+        self.c[j] * self.c[j] / self.norm2[j]
+    }
+
+    /// Picks the candidate most correlated with the residual (first of equals) and
+    /// orthogonalises it against the active set; None (and stopped) when none is left.
+    fn select(&mut self, d: &Design) -> Option<Pending> {
+        let n = d.n;
         loop {
             let mut best = None;
             let mut bv = -1.0;
-            for (j, &cj) in c.iter().enumerate() {
+            for j in 0..self.c.len() {
                 if self.excluded[j] {
                     continue;
                 }
-                let v = cj * cj / self.norm2[j];
+                let v = self.score(j);
                 if v > bv {
                     bv = v;
                     best = Some(j);
@@ -391,19 +532,19 @@ impl Path {
             }
             let Some(j) = best else {
                 self.state = Stop::Done;
-                return;
+                return None;
             };
             self.excluded[j] = true;
-            let col = psi.col(j);
+            let col = d.col(j);
             let mut v: Vec<f64> = (0..n).map(|i| col[i] * self.mask[i]).collect();
             let p = self.q.len();
             let mut rc = vec![0.0; p + 1];
             for _ in 0..2 {
                 for (t, qt) in self.q.iter().enumerate() {
-                    let d: f64 = qt.iter().zip(&v).map(|(a, b)| a * b).sum();
-                    rc[t] += d;
+                    let dt: f64 = qt.iter().zip(&v).map(|(a, b)| a * b).sum();
+                    rc[t] += dt;
                     for (vi, qi) in v.iter_mut().zip(qt) {
-                        *vi -= d * qi;
+                        *vi -= dt * qi;
                     }
                 }
             }
@@ -413,36 +554,78 @@ impl Path {
             }
             v.iter_mut().for_each(|a| *a /= rkk);
             rc[p] = rkk;
-            // R⁻¹ new column: −R⁻¹[:p,:p] r[:p] / rkk, diagonal 1/rkk
-            let mut ic = vec![0.0; p + 1];
-            for i in 0..p {
-                let mut s = 0.0;
-                for t in i..p {
-                    s += self.rinv[t][i] * rc[t];
-                }
-                ic[i] = -s / rkk;
-            }
-            ic[p] = 1.0 / rkk;
-            self.rinv_f2 += ic.iter().map(|a| a * a).sum::<f64>();
-            let d: f64 = v.iter().zip(&self.resid).map(|(a, b)| a * b).sum();
-            self.qty.push(
-                v.iter()
-                    .zip(y)
-                    .zip(&self.mask)
-                    .map(|((a, b), m)| a * b * m)
-                    .sum(),
-            );
-            for ((r, h), qi) in self.resid.iter_mut().zip(self.h.iter_mut()).zip(&v) {
-                *r -= d * qi;
-                *h += qi * qi;
-            }
-            self.q.push(v);
-            self.rcols.push(rc);
-            // store R⁻¹ by columns: rinv[col][row]
-            self.rinv.push(ic);
-            self.active.push(j);
-            break;
+            return Some(Pending { j, v, rc, rkk });
         }
+    }
+
+    /// The `want` best-scoring candidates not yet tried (Gram columns to compute ahead).
+    fn likely_next(&self, want: usize) -> Vec<usize> {
+        let mut top: Vec<(f64, usize)> = Vec::with_capacity(want + 1);
+        for j in 0..self.c.len() {
+            if self.excluded[j] {
+                continue;
+            }
+            let s = self.score(j);
+            if top.len() < want || s > top[top.len() - 1].0 {
+                let at = top.iter().position(|t| s > t.0).unwrap_or(top.len());
+                top.insert(at, (s, j));
+                top.truncate(want);
+            }
+        }
+        top.into_iter().map(|t| t.1).collect()
+    }
+
+    /// Adds the pending candidate, given its Gram columns `g` (one per row variant).
+    fn commit(&mut self, d: &Design, y: &[f64], pend: Pending, g: &[Vec<f64>], use_hold: bool) {
+        let n = y.len();
+        let Pending { j, v, rc, rkk } = pend;
+        let p = self.q.len();
+        // Ψ_vᵀq_new = (Ψ_vᵀψ_j − U·r_c)/r_kk
+        let np = self.c.len();
+        let mut un = g[self.variant].clone();
+        if p > 0 {
+            let um = faer::ColMut::from_slice_mut(&mut un);
+            faer::linalg::matmul::matmul(
+                um.as_mat_mut(),
+                Accum::Add,
+                MatRef::from_column_major_slice(&self.u, np, p),
+                faer::ColRef::from_slice(&rc[..p]).as_mat(),
+                -1.0,
+                Par::Seq,
+            );
+        }
+        un.iter_mut().for_each(|a| *a /= rkk);
+        // R⁻¹ new column: −R⁻¹[:p,:p] r[:p] / rkk, diagonal 1/rkk
+        let mut ic = vec![0.0; p + 1];
+        for i in 0..p {
+            let mut s = 0.0;
+            for t in i..p {
+                s += self.rinv[t][i] * rc[t];
+            }
+            ic[i] = -s / rkk;
+        }
+        ic[p] = 1.0 / rkk;
+        self.rinv_f2 += ic.iter().map(|a| a * a).sum::<f64>();
+        let dd: f64 = v.iter().zip(&self.resid).map(|(a, b)| a * b).sum();
+        self.qty.push(
+            v.iter()
+                .zip(y)
+                .zip(&self.mask)
+                .map(|((a, b), m)| a * b * m)
+                .sum(),
+        );
+        for ((r, h), qi) in self.resid.iter_mut().zip(self.h.iter_mut()).zip(&v) {
+            *r -= dd * qi;
+            *h += qi * qi;
+        }
+        for (c, ui) in self.c.iter_mut().zip(&un) {
+            *c -= dd * ui;
+        }
+        self.u.extend_from_slice(&un);
+        self.q.push(v);
+        // store R⁻¹ by columns: rinv[col][row]
+        self.rinv.push(ic);
+        self.active.push(j);
         let p = self.active.len();
         // corrected LOO
         let nt = self.n_train as f64;
@@ -468,7 +651,7 @@ impl Path {
                     .active
                     .iter()
                     .zip(&b)
-                    .map(|(&a, bb)| psi[(i, a)] * bb)
+                    .map(|(&a, bb)| d.col(a)[i] * bb)
                     .sum();
                 e += (y[i] - pred).powi(2);
             }
@@ -490,6 +673,32 @@ impl Path {
     }
 }
 
+/// Number of K-fold folds (0 under corrected LOO).
+fn folds_of(params: &PceParams) -> usize {
+    match params.selection {
+        Selection::KFold { folds } => folds,
+        Selection::CorrectedLoo => 0,
+    }
+}
+
+/// Row order grouping the folds (run t of a seeded shuffle goes to fold t mod K) and the fold
+/// segments in that order; the identity and one segment without folds.
+fn fold_order(n: usize, folds: usize, seed: u64) -> (Vec<usize>, Vec<(usize, usize)>) {
+    if folds == 0 {
+        return ((0..n).collect(), vec![(0, n)]);
+    }
+    let mut idx: Vec<usize> = (0..n).collect();
+    idx.shuffle(&mut stream(seed, 0xF01D));
+    let mut perm = Vec::with_capacity(n);
+    let mut segs = vec![];
+    for f in 0..folds {
+        let r0 = perm.len();
+        perm.extend(idx.iter().skip(f).step_by(folds));
+        segs.push((r0, perm.len() - r0));
+    }
+    (perm, segs)
+}
+
 struct Fit {
     terms: Vec<(usize, f64)>,
     cv_error: f64,
@@ -499,57 +708,85 @@ struct Fit {
     crit: f64,
 }
 
-/// OMP with the selection rule on one output.
+/// OMP with the selection rule on one output; `c0[v]` = Ψ_vᵀy and `col_norm2[v]` the squared
+/// column norms for each row variant v.
 fn omp_select(
-    psi: &Mat<f64>,
-    col_norm2: &[f64],
+    d: &Design,
+    cache: &GramCache,
+    col_norm2: &[Vec<f64>],
     y: &[f64],
-    params: &PceParams,
+    c0: Vec<Vec<f64>>,
     kmax_user: usize,
     parallel: bool,
-    seed: u64,
 ) -> Fit {
     let n = y.len();
-    let mut paths = vec![];
-    let folds = match params.selection {
-        Selection::KFold { folds } => folds,
-        Selection::CorrectedLoo => 0,
-    };
-    let kmax = |nt: usize| kmax_user.min(psi.ncols()).min(nt.saturating_sub(2)).max(1);
-    paths.push(Path::new(psi, y, vec![1.0; n], kmax(n), col_norm2));
-    if folds > 0 {
-        let mut idx: Vec<usize> = (0..n).collect();
-        idx.shuffle(&mut stream(seed, 0xF01D));
-        for f in 0..folds {
-            let mut mask = vec![1.0; n];
-            for (t, &i) in idx.iter().enumerate() {
-                if t % folds == f {
-                    mask[i] = 0.0;
-                }
-            }
-            let nt = mask.iter().filter(|&&m| m != 0.0).count();
-            paths.push(Path::new(psi, y, mask, kmax(nt), col_norm2));
-        }
-    }
+    let folds = if d.segs.len() > 1 { d.segs.len() } else { 0 };
+    let kmax = |nt: usize| kmax_user.min(d.p).min(nt.saturating_sub(2)).max(1);
+    let mut paths: Vec<Path> = c0
+        .into_iter()
+        .enumerate()
+        .map(|(v, c)| {
+            let nt = if v == 0 { n } else { n - d.segs[v - 1].1 };
+            Path::new(d, y, v, kmax(nt), col_norm2[v].clone(), c)
+        })
+        .collect();
     loop {
         // The full path (0) keeps going while any fold runs (its size is decided by the folds).
         let folds_running = paths[1..].iter().any(|p| p.state == Stop::Running);
-        let live: Vec<usize> = (0..paths.len())
-            .filter(|&i| paths[i].state == Stop::Running && (i > 0 || folds == 0 || folds_running))
-            .collect();
-        if live.is_empty() {
+        let live =
+            |i: usize, p: &Path| p.state == Stop::Running && (i > 0 || folds == 0 || folds_running);
+        if !paths.iter().enumerate().any(|(i, p)| live(i, p)) {
             break;
         }
-        let mut r = Mat::<f64>::zeros(n, live.len());
-        for (c, &pi) in live.iter().enumerate() {
-            for i in 0..n {
-                r[(i, c)] = paths[pi].resid[i];
+        let select = |(i, p): (usize, &mut Path)| live(i, p).then(|| p.select(d)).flatten();
+        let pending: Vec<Option<Pending>> = if parallel {
+            paths.par_iter_mut().enumerate().map(select).collect()
+        } else {
+            paths.iter_mut().enumerate().map(select).collect()
+        };
+        let mut need: Vec<usize> = pending
+            .iter()
+            .flatten()
+            .map(|p| p.j)
+            .filter(|&j| !cache.has(j))
+            .collect();
+        if !need.is_empty() {
+            for (p, pe) in paths.iter().zip(&pending) {
+                if pe.is_some() {
+                    need.extend(
+                        p.likely_next(PREFETCH)
+                            .into_iter()
+                            .filter(|&j| !cache.has(j)),
+                    );
+                }
             }
+            need.sort_unstable();
+            need.dedup();
+            cache.fill(d, &need, parallel);
         }
-        let c = correlations(psi, &r, parallel);
-        for (ci, &pi) in live.iter().enumerate() {
-            let cc: Vec<f64> = (0..psi.ncols()).map(|j| c[(j, ci)]).collect();
-            paths[pi].step(psi, y, &cc, pi > 0);
+        let work: Vec<(&mut Path, Pending, Arc<Vec<Vec<f64>>>)> = paths
+            .iter_mut()
+            .zip(pending)
+            .filter_map(|(p, pe)| {
+                let pe = pe?;
+                let g = match cache.get(pe.j) {
+                    Some(g) => g,
+                    None => {
+                        cache.fill(d, &[pe.j], parallel);
+                        cache.get(pe.j).expect("just filled")
+                    }
+                };
+                Some((p, pe, g))
+            })
+            .collect();
+        let commit = |(p, pe, g): (&mut Path, Pending, Arc<Vec<Vec<f64>>>)| {
+            let hold = p.variant > 0;
+            p.commit(d, y, pe, &g, hold)
+        };
+        if parallel {
+            work.into_par_iter().for_each(commit);
+        } else {
+            work.into_iter().for_each(commit);
         }
     }
     let full = &paths[0];
@@ -598,7 +835,7 @@ fn omp_select(
     // training error of the chosen model
     let mut tr = 0.0;
     for i in 0..n {
-        let pred: f64 = terms.iter().map(|&(a, b)| psi[(i, a)] * b).sum();
+        let pred: f64 = terms.iter().map(|&(a, b)| d.col(a)[i] * b).sum();
         tr += (y[i] - pred).powi(2);
     }
     let loo = full
@@ -617,14 +854,14 @@ fn omp_select(
 }
 
 /// Least squares on a fixed support through the normal equations (Cholesky), for the bootstrap.
-fn lstsq_support(psi: &Mat<f64>, rows: &[usize], support: &[usize], y: &[f64]) -> Option<Vec<f64>> {
+fn lstsq_support(d: &Design, rows: &[usize], support: &[usize], y: &[f64]) -> Option<Vec<f64>> {
     let p = support.len();
     let mut g = vec![0.0; p * p];
     let mut b = vec![0.0; p];
     let mut row = vec![0.0; p];
     for &i in rows {
         for (t, &a) in support.iter().enumerate() {
-            row[t] = psi[(i, a)];
+            row[t] = d.col(a)[i];
         }
         for s in 0..p {
             b[s] += row[s] * y[i];
@@ -818,25 +1055,69 @@ pub fn fit_pce(
             });
         }
     }
+    // One fold partition for all outputs (drawn from the seed); rows are stored fold by fold.
+    let (perm, segs) = fold_order(n, folds_of(params), params.seed);
+    let mut inv = vec![0; n];
+    for (pos, &r) in perm.iter().enumerate() {
+        inv[r] = pos;
+    }
+    let xi: Vec<f64> = perm
+        .iter()
+        .flat_map(|&r| xi[r * k..(r + 1) * k].iter().copied())
+        .collect();
+    let ys: Vec<Vec<f64>> = ys
+        .iter()
+        .map(|yo| perm.iter().map(|&r| yo[r]).collect())
+        .collect();
+    let ymat = Mat::<f64>::from_fn(n, m, |i, o| ys[o][i]);
     for (di, &deg) in degrees.iter().enumerate() {
         let basis = multi_indices(k, deg, params.q_norm);
         n_candidates = basis.len();
-        let psi = design_matrix(&xi, n, k, &germs, deg, &basis);
-        let col_norm2: Vec<f64> = (0..psi.ncols())
-            .map(|j| psi.col(j).iter().map(|v| v * v).sum())
-            .collect();
-        let fits: Vec<Option<Fit>> = (0..m)
+        let design = Design::new(&xi, n, k, &germs, deg, &basis, segs.clone());
+        let full_norm2: Vec<f64> = (0..design.p)
             .into_par_iter()
-            .map(|o| {
+            .map(|j| design.col(j).iter().map(|v| v * v).sum())
+            .collect();
+        // Squared column norms of every row variant (all rows; all but fold f), for all outputs.
+        let mut col_norm2 = vec![full_norm2.clone()];
+        if design.segs.len() > 1 {
+            for &(r0, len) in &design.segs {
+                col_norm2.push(
+                    (0..design.p)
+                        .into_par_iter()
+                        .map(|j| {
+                            full_norm2[j]
+                                - design.col(j)[r0..r0 + len]
+                                    .iter()
+                                    .map(|x| x * x)
+                                    .sum::<f64>()
+                        })
+                        .collect(),
+                );
+            }
+        }
+        // Ψ_vᵀy of every output and row variant, in one product per fold.
+        let c0 = design.variant_products(ymat.as_ref(), true);
+        let mut c0_by_output: Vec<Vec<Vec<f64>>> = (0..m).map(|_| vec![]).collect();
+        for variant in c0 {
+            for (o, c) in variant.into_iter().enumerate() {
+                c0_by_output[o].push(c);
+            }
+        }
+        let cache = GramCache::new(&design);
+        let fits: Vec<Option<Fit>> = c0_by_output
+            .into_par_iter()
+            .enumerate()
+            .map(|(o, c0)| {
                 still[o].then(|| {
                     omp_select(
-                        &psi,
+                        &design,
+                        &cache,
                         &col_norm2,
                         &ys[o],
-                        params,
+                        c0,
                         kmax_user,
                         parallel_inner,
-                        params.seed ^ (o as u64) << 20,
                     )
                 })
             })
@@ -852,7 +1133,7 @@ pub fn fit_pce(
             }
         }
         bases.push(basis);
-        psis.push(psi);
+        psis.push(design);
         if still.iter().all(|s| !s) {
             break;
         }
@@ -871,7 +1152,8 @@ pub fn fit_pce(
                     .filter_map(|rep| {
                         let mut rng =
                             stream(params.seed ^ 0xB0_0757 ^ (o as u64) << 24, rep as u64);
-                        let rows: Vec<usize> = (0..n).map(|_| rng.random_range(0..n)).collect();
+                        let rows: Vec<usize> =
+                            (0..n).map(|_| inv[rng.random_range(0..n)]).collect();
                         let c = lstsq_support(&psis[di], &rows, &support, &ys[o])?;
                         let terms: Vec<(usize, f64)> = support.iter().copied().zip(c).collect();
                         let (_, _, f, t, _) = indices_from(k, basis, &terms);
