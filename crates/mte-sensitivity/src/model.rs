@@ -81,6 +81,9 @@ pub(crate) fn eval_checked<M: Model + ?Sized>(
     let m = model.n_outputs();
     ys.iter_mut().for_each(|v| *v = f64::NAN);
     model.evaluate_batch(n_rows, xs, ys);
+    if all_finite(ys) {
+        return Ok(());
+    }
     if let Some(pos) = ys.iter().position(|v| !v.is_finite()) {
         let row = pos / m;
         return Err(Error::ModelOutput {
@@ -90,6 +93,21 @@ pub(crate) fn eval_checked<M: Model + ?Sized>(
         });
     }
     Ok(())
+}
+
+/// Whether every value is finite. `v · 0` is 0 for a finite `v` and NaN otherwise, so the lanes
+/// sum to NaN exactly when a value is not finite; eight independent lanes let the compiler
+/// vectorise what a short-circuiting search cannot (the check runs over every model output).
+fn all_finite(ys: &[f64]) -> bool {
+    let mut lanes = [0.0f64; 8];
+    let chunks = ys.chunks_exact(8);
+    let tail = chunks.remainder();
+    for c in chunks {
+        for (l, v) in lanes.iter_mut().zip(c) {
+            *l += v * 0.0;
+        }
+    }
+    lanes.iter().chain(tail).all(|v| v.is_finite())
 }
 
 /// Standard test functions with known sensitivity indices.
@@ -224,6 +242,25 @@ pub mod testfn {
         }
         fn n_outputs(&self) -> usize {
             self.coef.len()
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::all_finite;
+
+    #[test]
+    fn all_finite_finds_every_bad_value() {
+        let mut ys = vec![1e308; 21];
+        assert!(all_finite(&ys));
+        for pos in 0..ys.len() {
+            for bad in [f64::NAN, f64::INFINITY, f64::NEG_INFINITY] {
+                let keep = ys[pos];
+                ys[pos] = bad;
+                assert!(!all_finite(&ys), "{bad} at {pos}");
+                ys[pos] = keep;
+            }
         }
     }
 }
