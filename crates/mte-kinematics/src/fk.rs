@@ -77,29 +77,12 @@ impl Jacobian {
     pub fn apply(&self, e: &[f64]) -> PoseError {
         assert_eq!(e.len(), self.matrix.ncols(), "error vector length");
         let s = self.matrix.as_slice();
-        // Four independent accumulator sets: a single set makes every column wait for the
-        // previous add (a latency-bound chain of n_slots adds); four halve J·e's time.
-        const LANES: usize = 4;
-        let mut acc = [[0.0f64; 6]; LANES];
-        let (s_main, s_tail) = s.split_at(s.len() / (6 * LANES) * (6 * LANES));
-        let (e_main, e_tail) = e.split_at(s_main.len() / 6);
-        for (cols, ek) in s_main
-            .chunks_exact(6 * LANES)
-            .zip(e_main.chunks_exact(LANES))
-        {
-            for (lane, (col, &ek)) in acc.iter_mut().zip(cols.chunks_exact(6).zip(ek)) {
-                for r in 0..6 {
-                    lane[r] += col[r] * ek;
-                }
-            }
-        }
-        for (col, &ek) in s_tail.chunks_exact(6).zip(e_tail) {
+        let mut acc = [0.0f64; 6];
+        for (col, &ek) in s.chunks_exact(6).zip(e) {
             for r in 0..6 {
-                acc[0][r] += col[r] * ek;
+                acc[r] += col[r] * ek;
             }
         }
-        let acc: [f64; 6] =
-            std::array::from_fn(|r| (acc[0][r] + acc[1][r]) + (acc[2][r] + acc[3][r]));
         PoseError {
             position: Vec3::new(acc[0], acc[1], acc[2]),
             orientation: Vec3::new(acc[3], acc[4], acc[5]),
