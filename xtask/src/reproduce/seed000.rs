@@ -12,7 +12,7 @@ use super::ReproduceError;
 use mte_errors::catalogue::{Catalogue, ParamKind};
 use mte_errors::models::{Context, ErrorModel, ToleranceAxis, ToleranceForm, ToleranceModel};
 use mte_kinematics::Machine;
-use mte_linalg::Vec3;
+use mte_linalg::{DMat, Vec3};
 use mte_sensitivity::local::{LocalIndices, motion_increment, unit_increment};
 use std::f64::consts::{PI, TAU};
 use std::fmt::Write as _;
@@ -312,20 +312,28 @@ pub fn poses(machine: &Machine, lines: &[Generatrix]) -> Result<Vec<Vec<f64>>, R
     Ok(out)
 }
 
-/// First-order normal deviation at every contact point caused by a unit value of every
-/// parameter: `sens[n][point]` = nᵀ(∂p/∂δₙ + ∂ω/∂δₙ × lever) (mm per mm or per rad).
+/// First-order pose error per unit value of every parameter at each pose (6 × parameters,
+/// rows px, py, pz, ωx, ωy, ωz): the one kinematic computation both rankings below share.
 ///
 /// # Errors
 /// [`ReproduceError::Failed`] when the catalogue rejects a pose.
-pub fn sensitivities(
+pub fn effects(
     machine: &Machine,
     cat: &Catalogue,
-    lines: &[Generatrix],
     q: &[Vec<f64>],
-) -> Result<Vec<Vec<f64>>, ReproduceError> {
-    let mut sens = vec![Vec::with_capacity(lines.len() * POINTS_PER_LINE); cat.len()];
-    for (g, qi) in lines.iter().zip(q) {
-        let eff = cat.effect_matrix(machine, qi).map_err(fail)?;
+) -> Result<Vec<DMat>, ReproduceError> {
+    q.iter()
+        .map(|qi| cat.effect_matrix(machine, qi).map_err(fail))
+        .collect()
+}
+
+/// First-order normal deviation at every contact point caused by a unit value of every
+/// parameter: `sens[n][point]` = nᵀ(∂p/∂δₙ + ∂ω/∂δₙ × lever) (mm per mm or per rad), from the
+/// [`effects`] of the lines' poses.
+pub fn sensitivities(lines: &[Generatrix], effects: &[DMat]) -> Vec<Vec<f64>> {
+    let n_params = effects.first().map_or(0, DMat::ncols);
+    let mut sens = vec![Vec::with_capacity(lines.len() * POINTS_PER_LINE); n_params];
+    for (g, eff) in lines.iter().zip(effects) {
         for (n, s) in sens.iter_mut().enumerate() {
             let dp = Vec3::new(eff[(0, n)], eff[(1, n)], eff[(2, n)]);
             let dw = Vec3::new(eff[(3, n)], eff[(4, n)], eff[(5, n)]);
@@ -334,29 +342,19 @@ pub fn sensitivities(
             }
         }
     }
-    Ok(sens)
+    sens
 }
 
 /// First-order tool-tip position error (workpiece frame) per unit value of every parameter,
-/// one series per component: `tip[c][n][pose]` = ∂E_c/∂δₙ, E = the paper's eqs 1–5 vector.
-///
-/// # Errors
-/// [`ReproduceError::Failed`] when the catalogue rejects a pose.
-pub fn tip_sensitivities(
-    machine: &Machine,
-    cat: &Catalogue,
-    q: &[Vec<f64>],
-) -> Result<[Vec<Vec<f64>>; 3], ReproduceError> {
-    let mut tip: [Vec<Vec<f64>>; 3] = std::array::from_fn(|_| vec![Vec::new(); cat.len()]);
-    for qi in q {
-        let eff = cat.effect_matrix(machine, qi).map_err(fail)?;
-        for (c, series) in tip.iter_mut().enumerate() {
-            for (n, s) in series.iter_mut().enumerate() {
-                s.push(eff[(c, n)]);
-            }
-        }
-    }
-    Ok(tip)
+/// one series per component: `tip[c][n][pose]` = ∂E_c/∂δₙ, E = the paper's eqs 1–5 vector;
+/// read off the [`effects`].
+pub fn tip_sensitivities(effects: &[DMat]) -> [Vec<Vec<f64>>; 3] {
+    let n_params = effects.first().map_or(0, DMat::ncols);
+    std::array::from_fn(|c| {
+        (0..n_params)
+            .map(|n| effects.iter().map(|eff| eff[(c, n)]).collect())
+            .collect()
+    })
 }
 
 /// Rate dδₙ/dsₙ and increment Δsₙ per contact point (eqs 12–13): for a component error the
@@ -414,12 +412,13 @@ pub fn run() -> Result<Study, ReproduceError> {
     let sources = sources(&machine, &catalogue)?;
     let lines = s_piece();
     let poses = poses(&machine, &lines)?;
-    let sens = sensitivities(&machine, &catalogue, &lines, &poses)?;
+    let effects = effects(&machine, &catalogue, &poses)?;
+    let sens = sensitivities(&lines, &effects);
     let (rate, ds) = increments(&sources, &poses, POINTS_PER_LINE);
     let motion = motion_increment(&sens, &rate, &ds).map_err(fail)?;
     let (rate1, ds1) = increments(&sources, &poses, 1);
     let mut tip_effect = vec![0.0; catalogue.len()];
-    for series in tip_sensitivities(&machine, &catalogue, &poses)? {
+    for series in tip_sensitivities(&effects) {
         let ix = motion_increment(&series, &rate1, &ds1).map_err(fail)?;
         for (t, e) in tip_effect.iter_mut().zip(ix.effect) {
             *t += e;
@@ -774,7 +773,7 @@ mod tests {
     fn motion_increment_of_dx_y_matches_eq_14() {
         let (m, c, l, q) = setup();
         let src = sources(&m, &c).unwrap();
-        let sens = sensitivities(&m, &c, &l, &q).unwrap();
+        let sens = sensitivities(&l, &effects(&m, &c, &q).unwrap());
         let (rate, ds) = increments(&src, &q, POINTS_PER_LINE);
         let i = c.index_of("δx(y)").unwrap();
         assert_eq!(c.parameters()[i].name, "EXY");
@@ -803,8 +802,9 @@ mod tests {
     #[test]
     fn sensitivities_match_exact_kinematics() {
         let (m, c, l, q) = setup();
-        let sens = sensitivities(&m, &c, &l, &q).unwrap();
-        let tip = tip_sensitivities(&m, &c, &q).unwrap();
+        let eff = effects(&m, &c, &q).unwrap();
+        let sens = sensitivities(&l, &eff);
+        let tip = tip_sensitivities(&eff);
         let pick = [0usize, 10, 22, 29, 40, 46, 50, 52];
         for p in [0usize, 17, 49] {
             let mut g = mte_linalg::DMat::zeros(m.n_slots(), c.len());
