@@ -14,8 +14,9 @@
 //! LOO·n/(n − p)·(1 + tr(C⁻¹)/n), C = Ψ_AᵀΨ_A/n). One seeded fold partition serves every
 //! output. The correlations Ψ_vᵀr of each path (row variant v: all rows, or all but one fold) are
 //! updated after each step from the Gram columns Ψ_vᵀψ_a of the chosen candidate, cached and
-//! shared by all paths and outputs of one design (computed in products of a fixed width, so
-//! values do not depend on timing or thread count). The degree is chosen the same way when
+//! shared by all paths and outputs of one design. Ψ itself is never stored: every product Ψᵀ·B
+//! is computed parent by parent from the univariate values (see `Design`), each value one
+//! fixed-order dot product, so results do not depend on timing, batching or thread count. The degree is chosen the same way when
 //! `adaptive_degree` is on (degrees 1 … p, stop when the error grows).
 //!
 //! Sobol' indices from the coefficients (Sudret 2008): V = Σ_{α≠0} c_α², Sᵢ = Σ_{α: only i} c_α²/V,
@@ -26,7 +27,7 @@ use crate::dist::{Germ, Problem};
 use crate::error::{Error, Result};
 use crate::model::{Model, eval_checked};
 use crate::stats::{interval, stream};
-use faer::{Accum, Mat, MatRef, Par};
+use faer::{Accum, MatRef, Par};
 use rand::Rng;
 use rand::seq::SliceRandom;
 use rayon::prelude::*;
@@ -217,14 +218,36 @@ pub fn univariate(germ: Germ, xi: f64, p: usize, out: &mut [f64]) {
     }
 }
 
-/// Design matrix Ψ (n × P) stored column-major, rows grouped fold by fold so that every fold's
-/// held-out rows are one contiguous segment of each column.
+/// The design matrix Ψ (n × P), never stored: a candidate's column is the product of a few
+/// univariate columns, and every product Ψᵀ·B is computed parent by parent. Each candidate α is
+/// its parent (α without its last variable's factor, also a candidate: the sets are downward
+/// closed) times one univariate column φ_d(ξ_l); for a parent column π and right-hand side b,
+/// Σ_r b_r π_r φ_d(ξ_rl) = φ_d(ξ_l)ᵀ(b ⊙ π) — so Ψᵀ·B costs n·P·W multiply-adds on data that
+/// stay in cache (the univariate table is n × (1 + p·k)), where a stored Ψ (n·P values, 106 MB
+/// for 41 inputs at degree 3 and 1000 runs) would be streamed from memory on every product.
+/// Rows are grouped fold by fold, so every fold's held-out rows are one contiguous segment.
 struct Design {
     n: usize,
     p: usize,
-    data: Vec<f64>,
+    /// Univariate columns (n values each): 0 is the constant 1, 1 + (d − 1)·k + l is φ_d(ξ_l).
+    uni: Vec<f64>,
+    /// Univariate column index of each candidate's factors.
+    factors: Vec<Vec<usize>>,
+    /// Candidates grouped by parent.
+    groups: Vec<Group>,
+    /// Group and position in it of each candidate.
+    place: Vec<(usize, usize)>,
     /// Row ranges (start, len) of the folds (one range over all rows without folds).
     segs: Vec<(usize, usize)>,
+}
+
+/// The candidates α = parent × φ_d(ξ_l) of one parent.
+struct Group {
+    /// Values of the parent column (`None`: the constant 1, parent of the constant and the
+    /// univariate terms).
+    parent: Option<Vec<f64>>,
+    /// (candidate, univariate column of its last factor).
+    children: Vec<(usize, usize)>,
 }
 
 impl Design {
@@ -238,120 +261,308 @@ impl Design {
         basis: &[MultiIndex],
         segs: Vec<(usize, usize)>,
     ) -> Design {
-        let w = deg + 1;
-        let mut uni = vec![0.0; n * k * w];
+        let mut uni = vec![0.0; n * (1 + deg * k)];
+        uni[..n].fill(1.0);
+        let mut vals = vec![0.0; deg + 1];
         for r in 0..n {
-            for j in 0..k {
-                let o = (r * k + j) * w;
-                univariate(germs[j], xi[r * k + j], deg, &mut uni[o..o + w]);
+            for (l, &germ) in germs.iter().enumerate().take(k) {
+                univariate(germ, xi[r * k + l], deg, &mut vals);
+                for (d, &v) in vals.iter().enumerate().skip(1) {
+                    uni[(1 + (d - 1) * k + l) * n + r] = v;
+                }
             }
         }
-        let mut data = vec![0.0; n * basis.len()];
-        // Each column is independent: fill them in parallel, straight into place.
-        data.par_chunks_mut(n)
-            .zip(basis.par_iter())
-            .for_each(|(col, a)| {
-                for (r, v) in col.iter_mut().enumerate() {
-                    *v = a
-                        .iter()
-                        .map(|&(var, d)| uni[(r * k + var as usize) * w + d as usize])
-                        .product::<f64>();
-                }
-            });
-        Design {
+        let column_of = |&(l, d): &(u32, u32)| 1 + (d as usize - 1) * k + l as usize;
+        let factors: Vec<Vec<usize>> = basis
+            .iter()
+            .map(|a| a.iter().map(column_of).collect())
+            .collect();
+        let index: HashMap<&[(u32, u32)], usize> = basis
+            .iter()
+            .enumerate()
+            .map(|(j, a)| (a.as_slice(), j))
+            .collect();
+        let mut by_parent: HashMap<Option<usize>, Vec<(usize, usize)>> = HashMap::new();
+        for (j, a) in basis.iter().enumerate() {
+            let (parent, last) = match a.split_last() {
+                None => (None, 0),
+                Some((last, [])) => (None, column_of(last)),
+                Some((last, rest)) => (Some(index[rest]), column_of(last)),
+            };
+            by_parent.entry(parent).or_default().push((j, last));
+        }
+        let mut by_parent: Vec<_> = by_parent.into_iter().collect();
+        by_parent.sort_unstable();
+        let mut design = Design {
             n,
             p: basis.len(),
-            data,
+            uni,
+            factors,
+            groups: vec![],
+            place: vec![(0, 0); basis.len()],
             segs,
-        }
-    }
-
-    fn col(&self, j: usize) -> &[f64] {
-        &self.data[j * self.n..(j + 1) * self.n]
-    }
-
-    fn mat(&self) -> MatRef<'_, f64> {
-        MatRef::from_column_major_slice(&self.data, self.n, self.p)
-    }
-
-    /// Ψ[rows]ᵀ·B for one row segment, computed in fixed column chunks (thread-count
-    /// independent). `b` holds the segment's rows of the right-hand sides.
-    fn seg_products(
-        &self,
-        (r0, len): (usize, usize),
-        b: MatRef<'_, f64>,
-        parallel: bool,
-    ) -> Mat<f64> {
-        let psi = self.mat().subrows(r0, len);
-        let chunks: Vec<usize> = (0..self.p).step_by(COL_CHUNK).collect();
-        let work = |&c0: &usize| {
-            let c1 = (c0 + COL_CHUNK).min(self.p);
-            let mut out = Mat::<f64>::zeros(c1 - c0, b.ncols());
-            faer::linalg::matmul::matmul(
-                out.as_mut(),
-                Accum::Replace,
-                psi.subcols(c0, c1 - c0).transpose(),
-                b,
-                1.0,
-                Par::Seq,
-            );
-            out
         };
-        let parts: Vec<Mat<f64>> = if parallel {
-            chunks.par_iter().map(work).collect()
-        } else {
-            chunks.iter().map(work).collect()
-        };
-        let mut c = Mat::<f64>::zeros(self.p, b.ncols());
-        for (&c0, part) in chunks.iter().zip(&parts) {
-            c.as_mut()
-                .subrows_mut(c0, part.nrows())
-                .copy_from(part.as_ref());
+        for (g, (_, children)) in by_parent.iter().enumerate() {
+            for (i, &(j, _)) in children.iter().enumerate() {
+                design.place[j] = (g, i);
+            }
         }
-        c
-    }
-
-    /// Ψ_vᵀ·B for every variant v of the row set: v = 0 all rows, v = f + 1 all rows but fold
-    /// f (its training rows). `b` is n × r in the design's row order; returns [variant][rhs][P].
-    fn variant_products(&self, b: MatRef<'_, f64>, parallel: bool) -> Vec<Vec<Vec<f64>>> {
-        let r = b.ncols();
-        let holds: Vec<Mat<f64>> = self
-            .segs
-            .iter()
-            .map(|&(r0, len)| self.seg_products((r0, len), b.subrows(r0, len), parallel))
+        design.groups = by_parent
+            .into_iter()
+            .map(|(parent, children)| Group {
+                parent: parent.map(|p| design.col(p)),
+                children,
+            })
             .collect();
-        let full: Vec<Vec<f64>> = (0..r)
-            .map(|c| {
-                (0..self.p)
-                    .map(|j| holds.iter().map(|h| h[(j, c)]).sum::<f64>())
+        design
+    }
+
+    fn uni_col(&self, c: usize) -> &[f64] {
+        &self.uni[c * self.n..(c + 1) * self.n]
+    }
+
+    /// Column ψ_j over all rows.
+    fn col(&self, j: usize) -> Vec<f64> {
+        let mut out = vec![1.0; self.n];
+        for &c in &self.factors[j] {
+            for (o, u) in out.iter_mut().zip(self.uni_col(c)) {
+                *o *= u;
+            }
+        }
+        out
+    }
+
+    /// Squared column norms over every row variant: v = 0 all rows, v = f + 1 all rows but fold f.
+    fn norms2(&self) -> Vec<Vec<f64>> {
+        let per_seg: Vec<Vec<f64>> = (0..self.p)
+            .into_par_iter()
+            .map(|j| {
+                let c = self.col(j);
+                self.segs
+                    .iter()
+                    .map(|&(r0, len)| c[r0..r0 + len].iter().map(|v| v * v).sum())
                     .collect()
             })
             .collect();
-        let mut out = vec![];
-        if self.segs.len() > 1 {
-            for h in &holds {
-                out.push(
-                    full.iter()
-                        .enumerate()
-                        .map(|(c, fc)| fc.iter().enumerate().map(|(j, v)| v - h[(j, c)]).collect())
-                        .collect(),
-                );
+        self.combine_segments(1, |j| &per_seg[j])
+            .into_iter()
+            .map(|mut v| v.pop().expect("one right-hand side"))
+            .collect()
+    }
+
+    /// Ψ_vᵀ·B for every variant v of the row set (v = 0 all rows, v = f + 1 all rows but fold f).
+    /// `b` holds W columns of n values in the design's row order; returns [variant][rhs][P].
+    /// Every value is one fixed-order dot product per fold segment, whatever else is in `b` and
+    /// however the work is split over threads.
+    fn variant_products(&self, b: &[&[f64]], parallel: bool) -> Vec<Vec<Vec<f64>>> {
+        let w = b.len();
+        let n_seg = self.segs.len();
+        let arch = pulp::Arch::new();
+        let work = |Group { parent, children }: &Group| {
+            // z[c] = b_c ⊙ parent column
+            let z: Vec<Vec<f64>> = b
+                .iter()
+                .map(|bc| match parent {
+                    Some(pc) => bc.iter().zip(pc).map(|(x, y)| x * y).collect(),
+                    None => bc.to_vec(),
+                })
+                .collect();
+            let mut out = vec![0.0; children.len() * w * n_seg];
+            arch.dispatch(GroupProducts {
+                design: self,
+                children,
+                z: &z,
+                out: &mut out,
+            });
+            out
+        };
+        let parts: Vec<Vec<f64>> = if parallel {
+            self.groups.par_iter().map(work).collect()
+        } else {
+            self.groups.iter().map(work).collect()
+        };
+        self.combine_segments(w, |j| {
+            let (g, i) = self.place[j];
+            &parts[g][i * w * n_seg..(i + 1) * w * n_seg]
+        })
+    }
+
+    /// [variant][rhs][P] from per-segment values (`block(j)[rhs·segments + s]`): all rows is the
+    /// sum over the segments in order, fold f's training rows that sum minus segment f.
+    fn combine_segments<'a>(
+        &self,
+        w: usize,
+        block: impl Fn(usize) -> &'a [f64],
+    ) -> Vec<Vec<Vec<f64>>> {
+        let n_seg = self.segs.len();
+        let n_var = if n_seg > 1 { n_seg + 1 } else { 1 };
+        let mut out = vec![vec![vec![0.0; self.p]; w]; n_var];
+        for j in 0..self.p {
+            for (c, seg) in block(j).chunks_exact(n_seg).enumerate() {
+                let full: f64 = seg.iter().sum();
+                out[0][c][j] = full;
+                if n_var > 1 {
+                    for (s, v) in seg.iter().enumerate() {
+                        out[s + 1][c][j] = full - v;
+                    }
+                }
             }
         }
-        out.insert(0, full);
         out
     }
 }
 
-/// Fixed chunk of candidate columns per matrix product (keeps results thread-count independent).
-const COL_CHUNK: usize = 512;
+/// The segment dot products φ_{last}(ξ)[seg]ᵀ z_c[seg] of one parent's children, out[(child·W +
+/// c)·segments + s], vectorised for the CPU found at run time.
+struct GroupProducts<'a> {
+    design: &'a Design,
+    children: &'a [(usize, usize)],
+    z: &'a [Vec<f64>],
+    out: &'a mut [f64],
+}
+
+impl pulp::WithSimd for GroupProducts<'_> {
+    type Output = ();
+
+    #[inline(always)]
+    fn with_simd<S: pulp::Simd>(self, simd: S) {
+        let GroupProducts {
+            design,
+            children,
+            z,
+            out,
+        } = self;
+        let (w, n_seg) = (z.len(), design.segs.len());
+        let mut put = |i: usize, c: usize, s: usize, v: f64| out[(i * w + c) * n_seg + s] = v;
+        let nc = children.len();
+        let w4 = w - w % 4;
+        for (s, &(r0, len)) in design.segs.iter().enumerate() {
+            let a = |i: usize| &design.uni_col(children[i].1)[r0..r0 + len];
+            let zc = |c: usize| &z[c][r0..r0 + len];
+            // Right-hand sides four at a time: children in pairs, then the odd one.
+            for c in (0..w4).step_by(4) {
+                let zs = [zc(c), zc(c + 1), zc(c + 2), zc(c + 3)];
+                let mut i = 0;
+                while i + 2 <= nc {
+                    let d = dots_2x4(simd, [a(i), a(i + 1)], zs);
+                    for (t, row) in d.iter().enumerate() {
+                        for (cc, v) in row.iter().enumerate() {
+                            put(i + t, c + cc, s, *v);
+                        }
+                    }
+                    i += 2;
+                }
+                if i < nc {
+                    // aᵀz = zᵀa: the same fused operations with the roles swapped
+                    let d = dots_cx1(simd, zs, a(i));
+                    for (cc, v) in d.iter().enumerate() {
+                        put(i, c + cc, s, *v);
+                    }
+                }
+            }
+            // The other right-hand sides one at a time, children eight, four, one at a time.
+            for c in w4..w {
+                let b = zc(c);
+                let mut i = 0;
+                while i + 8 <= nc {
+                    let d = dots_cx1::<S, 8>(simd, std::array::from_fn(|t| a(i + t)), b);
+                    for (t, v) in d.iter().enumerate() {
+                        put(i + t, c, s, *v);
+                    }
+                    i += 8;
+                }
+                while i + 4 <= nc {
+                    let d = dots_cx1::<S, 4>(simd, std::array::from_fn(|t| a(i + t)), b);
+                    for (t, v) in d.iter().enumerate() {
+                        put(i + t, c, s, *v);
+                    }
+                    i += 4;
+                }
+                while i < nc {
+                    put(i, c, s, dots_cx1(simd, [a(i)], b)[0]);
+                    i += 1;
+                }
+            }
+        }
+    }
+}
+
+/// The dot products a_iᵀb_w of equal-length slices, two rows of `a` against four of `b` with
+/// the eight accumulators in registers. Every value is lane-wise fused multiply-adds in row
+/// order, lanes summed, then the left-over rows ([`finish`]) — the same operations as in
+/// [`dots_cx1`], so a value does not depend on which block computes it.
+#[inline(always)]
+fn dots_2x4<S: pulp::Simd>(simd: S, a: [&[f64]; 2], b: [&[f64]; 4]) -> [[f64; 4]; 2] {
+    let (a0, a0t) = S::as_simd_f64s(a[0]);
+    let (a1, a1t) = S::as_simd_f64s(a[1]);
+    let (b0, b0t) = S::as_simd_f64s(b[0]);
+    let (b1, b1t) = S::as_simd_f64s(b[1]);
+    let (b2, b2t) = S::as_simd_f64s(b[2]);
+    let (b3, b3t) = S::as_simd_f64s(b[3]);
+    let zero = simd.splat_f64s(0.0);
+    let (mut s00, mut s01, mut s02, mut s03) = (zero, zero, zero, zero);
+    let (mut s10, mut s11, mut s12, mut s13) = (zero, zero, zero, zero);
+    for r in 0..a0.len() {
+        let (x0, x1) = (a0[r], a1[r]);
+        let y = b0[r];
+        s00 = simd.mul_add_f64s(x0, y, s00);
+        s10 = simd.mul_add_f64s(x1, y, s10);
+        let y = b1[r];
+        s01 = simd.mul_add_f64s(x0, y, s01);
+        s11 = simd.mul_add_f64s(x1, y, s11);
+        let y = b2[r];
+        s02 = simd.mul_add_f64s(x0, y, s02);
+        s12 = simd.mul_add_f64s(x1, y, s12);
+        let y = b3[r];
+        s03 = simd.mul_add_f64s(x0, y, s03);
+        s13 = simd.mul_add_f64s(x1, y, s13);
+    }
+    [
+        [
+            finish(simd, s00, a0t, b0t),
+            finish(simd, s01, a0t, b1t),
+            finish(simd, s02, a0t, b2t),
+            finish(simd, s03, a0t, b3t),
+        ],
+        [
+            finish(simd, s10, a1t, b0t),
+            finish(simd, s11, a1t, b1t),
+            finish(simd, s12, a1t, b2t),
+            finish(simd, s13, a1t, b3t),
+        ],
+    ]
+}
+
+/// The C dot products a_iᵀb, each computed exactly as a value of [`dots_2x4`].
+#[inline(always)]
+fn dots_cx1<S: pulp::Simd, const C: usize>(simd: S, a: [&[f64]; C], b: &[f64]) -> [f64; C] {
+    let (bh, bt) = S::as_simd_f64s(b);
+    let a = a.map(|ai| {
+        let (h, t) = S::as_simd_f64s(ai);
+        (&h[..bh.len()], t)
+    });
+    let mut acc = [simd.splat_f64s(0.0); C];
+    for (r, y) in bh.iter().enumerate() {
+        for (acc_i, ai) in acc.iter_mut().zip(&a) {
+            *acc_i = simd.mul_add_f64s(ai.0[r], *y, *acc_i);
+        }
+    }
+    std::array::from_fn(|i| finish(simd, acc[i], a[i].1, bt))
+}
+
+/// Lanes of `acc` summed, then the rows that did not fill a vector.
+#[inline(always)]
+fn finish<S: pulp::Simd>(simd: S, acc: S::f64s, a: &[f64], b: &[f64]) -> f64 {
+    let mut s = simd.reduce_sum_f64s(acc);
+    for (x, y) in a.iter().zip(b) {
+        s = x.mul_add(*y, s);
+    }
+    s
+}
 
 /// Candidates whose Gram columns are computed ahead, per path, whenever a path needs one that is
 /// not cached (their values do not depend on when they are computed, only the time does).
-const PREFETCH: usize = 12;
-
-/// Columns per Gram product (fixed: see [`GramCache::fill`]).
-const GRAM_BATCH: usize = 32;
+const PREFETCH: usize = 4;
 
 /// Largest number of cached Gram columns (each holds folds + 1 vectors of P values).
 const CACHE_BYTES: usize = 256 << 20;
@@ -379,24 +590,23 @@ impl GramCache {
         self.cols.lock().expect("cache lock").contains_key(&j)
     }
 
-    /// Computes and stores the Gram columns of `want`, in products of exactly [`GRAM_BATCH`]
-    /// columns (the last batch padded with repeats), so that a column's values do not depend on
-    /// which other columns share its product — nor on timing or thread count.
+    /// Computes and stores the Gram columns of `want` (their values do not depend on which
+    /// other columns share the product, nor on timing or thread count).
     fn fill(&self, d: &Design, want: &[usize], parallel: bool) {
-        for batch in want.chunks(GRAM_BATCH) {
-            let mut b = Mat::<f64>::zeros(d.n, GRAM_BATCH);
-            for c in 0..GRAM_BATCH {
-                let j = batch[c.min(batch.len() - 1)];
-                b.col_mut(c).copy_from(faer::ColRef::from_slice(d.col(j)));
+        let cols: Vec<Vec<f64>> = want.iter().map(|&j| d.col(j)).collect();
+        let refs: Vec<&[f64]> = cols.iter().map(Vec::as_slice).collect();
+        let mut by_column: Vec<Vec<Vec<f64>>> = want.iter().map(|_| vec![]).collect();
+        for variant in d.variant_products(&refs, parallel) {
+            for (c, values) in variant.into_iter().enumerate() {
+                by_column[c].push(values);
             }
-            let v = d.variant_products(b.as_ref(), parallel);
-            let mut map = self.cols.lock().expect("cache lock");
-            if map.len() + batch.len() > self.capacity {
-                map.clear();
-            }
-            for (c, &j) in batch.iter().enumerate() {
-                map.insert(j, Arc::new(v.iter().map(|var| var[c].clone()).collect()));
-            }
+        }
+        let mut map = self.cols.lock().expect("cache lock");
+        if map.len() + want.len() > self.capacity {
+            map.clear();
+        }
+        for (&j, g) in want.iter().zip(by_column) {
+            map.insert(j, Arc::new(g));
         }
     }
 }
@@ -410,6 +620,8 @@ enum Stop {
 /// A candidate chosen by a path, orthogonalised against its active set, awaiting its Gram column.
 struct Pending {
     j: usize,
+    /// The candidate's values on the held-out rows (for the hold-out error).
+    held: Vec<f64>,
     v: Vec<f64>,
     rc: Vec<f64>,
     rkk: f64,
@@ -427,6 +639,8 @@ struct Path {
     norm2: Vec<f64>,
     excluded: Vec<bool>,
     active: Vec<usize>,
+    /// Held-out rows of each active column.
+    held: Vec<Vec<f64>>,
     q: Vec<Vec<f64>>,
     rinv: Vec<Vec<f64>>,
     rinv_f2: f64,
@@ -483,6 +697,7 @@ impl Path {
             norm2,
             excluded,
             active: vec![],
+            held: vec![],
             q: vec![],
             rinv: vec![],
             rinv_f2: 0.0,
@@ -554,7 +769,14 @@ impl Path {
             }
             v.iter_mut().for_each(|a| *a /= rkk);
             rc[p] = rkk;
-            return Some(Pending { j, v, rc, rkk });
+            let held = self.hold.iter().map(|&i| col[i]).collect();
+            return Some(Pending {
+                j,
+                held,
+                v,
+                rc,
+                rkk,
+            });
         }
     }
 
@@ -576,9 +798,15 @@ impl Path {
     }
 
     /// Adds the pending candidate, given its Gram columns `g` (one per row variant).
-    fn commit(&mut self, d: &Design, y: &[f64], pend: Pending, g: &[Vec<f64>], use_hold: bool) {
+    fn commit(&mut self, y: &[f64], pend: Pending, g: &[Vec<f64>], use_hold: bool) {
         let n = y.len();
-        let Pending { j, v, rc, rkk } = pend;
+        let Pending {
+            j,
+            held,
+            v,
+            rc,
+            rkk,
+        } = pend;
         let p = self.q.len();
         // Ψ_vᵀq_new = (Ψ_vᵀψ_j − U·r_c)/r_kk
         let np = self.c.len();
@@ -626,6 +854,7 @@ impl Path {
         // store R⁻¹ by columns: rinv[col][row]
         self.rinv.push(ic);
         self.active.push(j);
+        self.held.push(held);
         let p = self.active.len();
         // corrected LOO
         let nt = self.n_train as f64;
@@ -646,13 +875,8 @@ impl Path {
         let crit = if use_hold {
             let b = self.coef(p);
             let mut e = 0.0;
-            for &i in &self.hold {
-                let pred: f64 = self
-                    .active
-                    .iter()
-                    .zip(&b)
-                    .map(|(&a, bb)| d.col(a)[i] * bb)
-                    .sum();
+            for (t, &i) in self.hold.iter().enumerate() {
+                let pred: f64 = self.held.iter().zip(&b).map(|(h, bb)| h[t] * bb).sum();
                 e += (y[i] - pred).powi(2);
             }
             let e = e / self.hold.len() as f64;
@@ -781,7 +1005,7 @@ fn omp_select(
             .collect();
         let commit = |(p, pe, g): (&mut Path, Pending, Arc<Vec<Vec<f64>>>)| {
             let hold = p.variant > 0;
-            p.commit(d, y, pe, &g, hold)
+            p.commit(y, pe, &g, hold)
         };
         if parallel {
             work.into_par_iter().for_each(commit);
@@ -833,11 +1057,13 @@ fn omp_select(
         .zip(coef.iter().copied())
         .collect();
     // training error of the chosen model
-    let mut tr = 0.0;
-    for i in 0..n {
-        let pred: f64 = terms.iter().map(|&(a, b)| d.col(a)[i] * b).sum();
-        tr += (y[i] - pred).powi(2);
+    let mut pred = vec![0.0; n];
+    for &(a, b) in &terms {
+        for (p, v) in pred.iter_mut().zip(d.col(a)) {
+            *p += v * b;
+        }
     }
+    let tr: f64 = y.iter().zip(&pred).map(|(a, b)| (a - b).powi(2)).sum();
     let loo = full
         .cloo
         .get(p_star.saturating_sub(1))
@@ -854,14 +1080,14 @@ fn omp_select(
 }
 
 /// Least squares on a fixed support through the normal equations (Cholesky), for the bootstrap.
-fn lstsq_support(d: &Design, rows: &[usize], support: &[usize], y: &[f64]) -> Option<Vec<f64>> {
+fn lstsq_support(support: &[Vec<f64>], rows: &[usize], y: &[f64]) -> Option<Vec<f64>> {
     let p = support.len();
     let mut g = vec![0.0; p * p];
     let mut b = vec![0.0; p];
     let mut row = vec![0.0; p];
     for &i in rows {
-        for (t, &a) in support.iter().enumerate() {
-            row[t] = d.col(a)[i];
+        for (t, col) in support.iter().enumerate() {
+            row[t] = col[i];
         }
         for s in 0..p {
             b[s] += row[s] * y[i];
@@ -1069,35 +1295,15 @@ pub fn fit_pce(
         .iter()
         .map(|yo| perm.iter().map(|&r| yo[r]).collect())
         .collect();
-    let ymat = Mat::<f64>::from_fn(n, m, |i, o| ys[o][i]);
     for (di, &deg) in degrees.iter().enumerate() {
         let basis = multi_indices(k, deg, params.q_norm);
         n_candidates = basis.len();
         let design = Design::new(&xi, n, k, &germs, deg, &basis, segs.clone());
-        let full_norm2: Vec<f64> = (0..design.p)
-            .into_par_iter()
-            .map(|j| design.col(j).iter().map(|v| v * v).sum())
-            .collect();
         // Squared column norms of every row variant (all rows; all but fold f), for all outputs.
-        let mut col_norm2 = vec![full_norm2.clone()];
-        if design.segs.len() > 1 {
-            for &(r0, len) in &design.segs {
-                col_norm2.push(
-                    (0..design.p)
-                        .into_par_iter()
-                        .map(|j| {
-                            full_norm2[j]
-                                - design.col(j)[r0..r0 + len]
-                                    .iter()
-                                    .map(|x| x * x)
-                                    .sum::<f64>()
-                        })
-                        .collect(),
-                );
-            }
-        }
-        // Ψ_vᵀy of every output and row variant, in one product per fold.
-        let c0 = design.variant_products(ymat.as_ref(), true);
+        let col_norm2 = design.norms2();
+        // Ψ_vᵀy of every output and row variant, in one product.
+        let y_refs: Vec<&[f64]> = ys.iter().map(Vec::as_slice).collect();
+        let c0 = design.variant_products(&y_refs, true);
         let mut c0_by_output: Vec<Vec<Vec<f64>>> = (0..m).map(|_| vec![]).collect();
         for variant in c0 {
             for (o, c) in variant.into_iter().enumerate() {
@@ -1148,13 +1354,15 @@ pub fn fit_pce(
             let (mut first_ci, mut total_ci) = (vec![], vec![]);
             if params.n_bootstrap > 0 {
                 let support: Vec<usize> = fit.terms.iter().map(|t| t.0).collect();
+                let support_cols: Vec<Vec<f64>> =
+                    support.iter().map(|&a| psis[di].col(a)).collect();
                 let reps: Vec<(Vec<f64>, Vec<f64>)> = (0..params.n_bootstrap)
                     .filter_map(|rep| {
                         let mut rng =
                             stream(params.seed ^ 0xB0_0757 ^ (o as u64) << 24, rep as u64);
                         let rows: Vec<usize> =
                             (0..n).map(|_| inv[rng.random_range(0..n)]).collect();
-                        let c = lstsq_support(&psis[di], &rows, &support, &ys[o])?;
+                        let c = lstsq_support(&support_cols, &rows, &ys[o])?;
                         let terms: Vec<(usize, f64)> = support.iter().copied().zip(c).collect();
                         let (_, _, f, t, _) = indices_from(k, basis, &terms);
                         Some((f, t))
@@ -1281,5 +1489,71 @@ impl PceResult {
             .sum::<f64>()
             / n as f64;
         mse / var
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Ψ_vᵀb from the parent-by-parent products against the sums written out from the
+    /// multi-indices, for mixed germs, a hyperbolic set and folds of unequal length; a value must
+    /// not depend on the other right-hand sides of the product.
+    #[test]
+    fn implicit_products_match_the_written_out_design() {
+        let (n, k, deg) = (53, 4, 4);
+        let germs = [Germ::Normal, Germ::Uniform, Germ::Normal, Germ::Uniform];
+        let xi: Vec<f64> = (0..n * k)
+            .map(|i| ((i * 7919 % 211) as f64 / 105.0 - 1.0) * if i % 2 == 0 { 2.0 } else { 1.0 })
+            .collect();
+        let basis = multi_indices(k, deg, 0.75);
+        let segs = vec![(0, 18), (18, 18), (36, 17)];
+        let d = Design::new(&xi, n, k, &germs, deg, &basis, segs.clone());
+        let b: Vec<Vec<f64>> = (0..5)
+            .map(|c| {
+                (0..n)
+                    .map(|r| ((r * 31 + c * 17) % 13) as f64 - 6.0)
+                    .collect()
+            })
+            .collect();
+        let written = |j: usize, r: usize| {
+            let mut uni = vec![0.0; deg + 1];
+            basis[j].iter().fold(1.0, |acc, &(v, dg)| {
+                univariate(germs[v as usize], xi[r * k + v as usize], deg, &mut uni);
+                acc * uni[dg as usize]
+            })
+        };
+        let refs: Vec<&[f64]> = b.iter().map(Vec::as_slice).collect();
+        let all = d.variant_products(&refs, true);
+        assert_eq!(all.len(), segs.len() + 1);
+        for (v, variant) in all.iter().enumerate() {
+            for (c, bc) in b.iter().enumerate() {
+                for j in 0..basis.len() {
+                    let rows = (0..n).filter(|&r| {
+                        v == 0 || !(segs[v - 1].0..segs[v - 1].0 + segs[v - 1].1).contains(&r)
+                    });
+                    let want: f64 = rows.map(|r| written(j, r) * bc[r]).sum();
+                    let got = variant[c][j];
+                    assert!(
+                        (got - want).abs() <= 1e-11 * (1.0 + want.abs()),
+                        "v {v} c {c} {:?}: {got} vs {want}",
+                        basis[j]
+                    );
+                }
+            }
+        }
+        for j in 0..basis.len() {
+            let col = d.col(j);
+            for r in 0..n {
+                assert!((col[r] - written(j, r)).abs() <= 1e-12 * (1.0 + col[r].abs()));
+            }
+        }
+        // the same column alone, and among others in another position: bit-identical
+        let alone = d.variant_products(&refs[3..4], false);
+        let shuffled = d.variant_products(&[refs[1], refs[3], refs[0]], false);
+        for v in 0..all.len() {
+            assert_eq!(alone[v][0], all[v][3]);
+            assert_eq!(shuffled[v][1], all[v][3]);
+        }
     }
 }
