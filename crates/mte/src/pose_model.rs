@@ -188,10 +188,9 @@ impl PoseErrorModel {
             let d = e.distribution.expect("random entries have a distribution");
             let dist = match d {
                 ErrorDistribution::Normal { mean, sd } => Distribution::Normal { mean, sd },
-                ErrorDistribution::Uniform { low, high } => Distribution::Uniform {
-                    lo: low,
-                    hi: high,
-                },
+                ErrorDistribution::Uniform { low, high } => {
+                    Distribution::Uniform { lo: low, hi: high }
+                }
                 ErrorDistribution::TruncatedNormal {
                     mean,
                     sd,
@@ -222,7 +221,8 @@ impl PoseErrorModel {
         let mut fixed = set.clone();
         fixed.entries.retain(|e| e.distribution.is_none());
         let fixed = Evaluator::with_catalogue(machine, catalogue.clone(), &fixed)?;
-        let model = PoseErrorModel::build(machine, catalogue, &columns, Some(&fixed), points, mode)?;
+        let model =
+            PoseErrorModel::build(machine, catalogue, &columns, Some(&fixed), points, mode)?;
         Ok((problem, model))
     }
 
@@ -273,9 +273,14 @@ impl PoseErrorModel {
                 for (p, q) in points.iter().enumerate() {
                     let mut e0 = vec![0.0; n_slots];
                     let pe = ev.pose_error_first_order(&AxisState::at(q), &mut e0, &mut jac)?;
-                    stacked
-                        .rows_mut(6 * p, 6)
-                        .copy_from_slice(&[pe.position.x, pe.position.y, pe.position.z, pe.orientation.x, pe.orientation.y, pe.orientation.z]);
+                    stacked.rows_mut(6 * p, 6).copy_from_slice(&[
+                        pe.position.x,
+                        pe.position.y,
+                        pe.position.z,
+                        pe.orientation.x,
+                        pe.orientation.y,
+                        pe.orientation.z,
+                    ]);
                     e0s.push(DVec::from_vec(e0));
                 }
                 Some((e0s, stacked))
