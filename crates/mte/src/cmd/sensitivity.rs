@@ -11,7 +11,8 @@ use indicatif::{ProgressBar, ProgressDrawTarget};
 use mte::CliError;
 use mte::plot::{Axis, Interval, error_bar_chart};
 use mte::pose_model::{
-    COMPONENTS, Linearisation, PoseErrorModel, diagonal_points, point_from_mm_deg, points_from_csv,
+    COMPONENTS, Linearisation, PoseErrorModel, diagonal_points, generalised_index,
+    point_from_mm_deg, points_from_csv,
 };
 use mte_errors::units::Kind;
 use mte_errors::{Catalogue, ErrorSet};
@@ -540,52 +541,6 @@ fn analyse(args: &Args, v: &Value, st: &Study, path: &Path) -> Result<Indices, C
     })
 }
 
-/// The variance-weighted ("generalised", Gamboa et al. 2014) index over the outputs `members`:
-/// Σ_p V_p·S_p / Σ_p V_p per input, and the same weighting of the per-output interval ends (a
-/// conservative interval: it treats the outputs' estimation errors as fully correlated and the
-/// weights as exact). `None` when the members carry no weight.
-pub fn aggregate(
-    values: &[Vec<f64>],
-    intervals: &[Vec<[f64; 2]>],
-    weights: &[f64],
-    members: &[usize],
-) -> Option<(Vec<f64>, Vec<[f64; 2]>)> {
-    let w: f64 = members.iter().map(|&o| weights[o]).sum();
-    if !(w > 0.0) {
-        return None;
-    }
-    let k = values[members[0]].len();
-    let val = (0..k)
-        .map(|i| {
-            members
-                .iter()
-                .map(|&o| weights[o] * values[o][i])
-                .sum::<f64>()
-                / w
-        })
-        .collect();
-    let has_ci = members
-        .iter()
-        .all(|&o| intervals.get(o).is_some_and(|c| c.len() == k));
-    let ci = if has_ci {
-        (0..k)
-            .map(|i| {
-                let end = |e: usize| {
-                    members
-                        .iter()
-                        .map(|&o| weights[o] * intervals[o][i][e])
-                        .sum::<f64>()
-                        / w
-                };
-                [end(0), end(1)]
-            })
-            .collect()
-    } else {
-        vec![]
-    };
-    Some((val, ci))
-}
-
 fn bars(names: &[String], vals: &[f64], ci: &[[f64; 2]]) -> Vec<Interval> {
     names
         .iter()
@@ -720,7 +675,7 @@ pub fn run(args: &Args) -> Result<(), CliError> {
             .shares
             .iter()
             .filter_map(|(l, vals, ci)| {
-                aggregate(vals, ci, &ix.weights, &members).map(|(a, b)| (l.clone(), a, b))
+                generalised_index(vals, ci, &ix.weights, &members).map(|(a, b)| (l.clone(), a, b))
             })
             .collect();
         if per.len() != ix.shares.len() {
