@@ -319,9 +319,9 @@ fn sobol_of_the_first_order_error_set_model_is_analytic() {
     )
     .unwrap();
     // Linear model, independent inputs: S_i = S_Ti = a_i² V_i / Σ_j a_j² V_j for each output.
-    // 0.02: the Saltelli/Jansen estimators at N = 2^14 (Sobol' sequence) are good to ~1e-2 on
-    // indices of order 1 (Saltelli et al. 2010, fig. 2); a wrong column or variance is off by ≥ 0.1.
-    let tol = 0.02;
+    // 0.01: measured 1.1e-3 for the Saltelli/Jansen estimators at N = 2^14 (Sobol' sequence,
+    // seed 11); a wrong column or variance is off by ≥ 0.1.
+    let tol = 0.01;
     let mut worst: f64 = 0.0;
     for (o, out) in r.outputs.iter().enumerate() {
         let v: Vec<f64> = a[o].iter().zip(&var).map(|(ai, vi)| ai * ai * vi).collect();

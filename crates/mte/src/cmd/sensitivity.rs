@@ -11,7 +11,7 @@ use indicatif::{ProgressBar, ProgressDrawTarget};
 use mte::CliError;
 use mte::plot::{Axis, Interval, error_bar_chart};
 use mte::pose_model::{
-    COMPONENTS, Linearisation, PoseErrorModel, diagonal_points, generalised_index,
+    COMPONENTS, Linearisation, PoseErrorModel, PoseModelError, diagonal_points, generalised_index,
     point_from_mm_deg, points_from_csv,
 };
 use mte_errors::units::Kind;
@@ -287,12 +287,15 @@ fn machine_study(v: &Value, mv: &Value, path: &Path) -> Result<Study, CliError> 
     let points = parse_points(mv.get("points"), &machine, dir, path)?;
     let catalogue = Catalogue::for_machine(&machine);
     let (problem, model) = PoseErrorModel::from_error_set(&machine, &catalogue, &set, points, mode)
-        .map_err(|e| {
-            field_err(
+        .map_err(|e| match e {
+            PoseModelError::PointLength { .. }
+            | PoseModelError::NotFinite { .. }
+            | PoseModelError::NoPoints => field_err(path, "model.points", e),
+            e => field_err(
                 path,
-                "model",
-                format!("{e} (error set {})", errors_path.display()),
-            )
+                "model.errors",
+                format!("{}: {e}", errors_path.display()),
+            ),
         })?;
     // Scale of each output and its first-order standard deviation, in µm or arcsec.
     let names = model.output_names();
