@@ -510,7 +510,7 @@ pub fn generalised_index(
     members: &[usize],
 ) -> Option<(Vec<f64>, Vec<[f64; 2]>)> {
     let w: f64 = members.iter().map(|&o| weights[o]).sum();
-    if !(w > 0.0) {
+    if w.is_nan() || w <= 0.0 {
         return None;
     }
     let k = values[members[0]].len();

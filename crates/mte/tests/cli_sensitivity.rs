@@ -64,10 +64,13 @@ fn csv(path: &Path) -> Vec<std::collections::HashMap<String, String>> {
         .collect()
 }
 
+/// Output names, input names, indices per output, indices per direction.
+type Analytic = (Vec<String>, Vec<String>, Vec<Vec<f64>>, Vec<Vec<f64>>);
+
 /// Analytic first-order indices of the fixture's study: per output (6·p + c) and input,
 /// a_i²σ_i² / Σ_j a_j²σ_j² with a from the library's effect matrix; and the analytic
 /// aggregate per direction Σ_p a_pi²σ_i² / Σ_p Σ_j a_pj²σ_j².
-fn analytic() -> (Vec<String>, Vec<String>, Vec<Vec<f64>>, Vec<Vec<f64>>) {
+fn analytic() -> Analytic {
     let m = Machine::library("seed003-ac-table").unwrap();
     let set = ErrorSet::from_file(&root().join("fixtures/errors/seed003-demo.json")).unwrap();
     let (problem, model) = PoseErrorModel::from_error_set(

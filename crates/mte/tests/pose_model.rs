@@ -326,8 +326,8 @@ fn sobol_of_the_first_order_error_set_model_is_analytic() {
     for (o, out) in r.outputs.iter().enumerate() {
         let v: Vec<f64> = a[o].iter().zip(&var).map(|(ai, vi)| ai * ai * vi).collect();
         let tot: f64 = v.iter().sum();
-        for i in 0..problem.dim() {
-            let s = v[i] / tot;
+        for (i, vi) in v.iter().enumerate() {
+            let s = vi / tot;
             worst = worst
                 .max((out.first[i] - s).abs())
                 .max((out.total[i] - s).abs());

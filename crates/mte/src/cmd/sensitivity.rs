@@ -174,6 +174,8 @@ struct MachineOutputs {
     outputs: Vec<(String, usize, usize)>,
     /// Outputs left out for having no variance.
     dropped: Vec<String>,
+    /// Number of test points.
+    n_points: usize,
     /// Description for result.json (machine, error set, points, inputs with their spread).
     info: Value,
 }
@@ -361,6 +363,7 @@ fn machine_study(v: &Value, mv: &Value, path: &Path) -> Result<Study, CliError> 
         "outputs": kept.iter().map(|&o| names[o].clone()).collect::<Vec<_>>(),
         "outputs_without_variance": dropped.iter().map(|&o| names[o].clone()).collect::<Vec<_>>(),
     });
+    let n_points = model.points().len();
     let outputs = kept
         .iter()
         .map(|&o| (names[o].clone(), o / 6, o % 6))
@@ -376,6 +379,7 @@ fn machine_study(v: &Value, mv: &Value, path: &Path) -> Result<Study, CliError> 
         machine: Some(MachineOutputs {
             outputs,
             dropped,
+            n_points,
             info,
         }),
     })
@@ -395,13 +399,38 @@ fn study(v: &Value, path: &Path) -> Result<Study, CliError> {
     })
 }
 
+/// One index over outputs: its name, and per output the value and interval of each input.
+type OverOutputs = (String, Vec<Vec<f64>>, Vec<Vec<[f64; 2]>>);
+
+/// Sobol' and PCE: the rows (S1, ST) of each output, weighted by its variance.
+fn sobol_like(json: Value, per_output: Vec<(Vec<IndexRow>, f64)>) -> Indices {
+    let shares = ["S1", "ST"]
+        .iter()
+        .enumerate()
+        .map(|(j, l)| {
+            (
+                l.to_string(),
+                per_output.iter().map(|(r, _)| r[j].1.clone()).collect(),
+                per_output.iter().map(|(r, _)| r[j].2.clone()).collect(),
+            )
+        })
+        .collect();
+    let weights = per_output.iter().map(|p| p.1).collect();
+    Indices {
+        json,
+        rows: per_output.into_iter().map(|p| p.0).collect(),
+        shares,
+        weights,
+    }
+}
+
 /// Indices of one method for every output, and what the per-direction aggregate is built from.
 struct Indices {
     json: Value,
     /// Per output: (index name, value per input, interval per input or empty).
     rows: Vec<Vec<IndexRow>>,
     /// Per aggregated index: its name, and per output the shares and intervals to weight.
-    shares: Vec<(String, Vec<Vec<f64>>, Vec<Vec<[f64; 2]>>)>,
+    shares: Vec<OverOutputs>,
     /// Weight of each output: its variance (Sobol', PCE) or the sum of its squared effects.
     weights: Vec<f64>,
 }
@@ -421,36 +450,6 @@ fn squared_shares(effects: &[&Vec<f64>]) -> (Vec<Vec<f64>>, Vec<f64>) {
 fn analyse(args: &Args, v: &Value, st: &Study, path: &Path) -> Result<Indices, CliError> {
     let model = Boxed(st.model.as_ref());
     let problem = &st.problem;
-    let sobol_like =
-        |json: Value, outs: Vec<(&Vec<f64>, &Vec<f64>, &Vec<[f64; 2]>, &Vec<[f64; 2]>, f64)>| {
-            let rows = outs
-                .iter()
-                .map(|(f, t, fc, tc, _)| {
-                    vec![
-                        ("S1".to_string(), (*f).clone(), (*fc).clone()),
-                        ("ST".to_string(), (*t).clone(), (*tc).clone()),
-                    ]
-                })
-                .collect();
-            let shares = vec![
-                (
-                    "S1".to_string(),
-                    outs.iter().map(|o| o.0.clone()).collect(),
-                    outs.iter().map(|o| o.2.clone()).collect(),
-                ),
-                (
-                    "ST".to_string(),
-                    outs.iter().map(|o| o.1.clone()).collect(),
-                    outs.iter().map(|o| o.3.clone()).collect(),
-                ),
-            ];
-            Indices {
-                json,
-                rows,
-                shares,
-                weights: outs.iter().map(|o| o.4).collect(),
-            }
-        };
     Ok(match args.method {
         Method::Sobol => {
             let p: mte_sensitivity::sobol::SobolParams = params(v, "sobol", path)?;
@@ -469,7 +468,13 @@ fn analyse(args: &Args, v: &Value, st: &Study, path: &Path) -> Result<Indices, C
                 json,
                 r.outputs
                     .iter()
-                    .map(|o| (&o.first, &o.total, &o.first_ci, &o.total_ci, o.variance))
+                    .map(|o| {
+                        let rows = vec![
+                            ("S1".to_string(), o.first.clone(), o.first_ci.clone()),
+                            ("ST".to_string(), o.total.clone(), o.total_ci.clone()),
+                        ];
+                        (rows, o.variance)
+                    })
                     .collect(),
             )
         }
@@ -495,7 +500,13 @@ fn analyse(args: &Args, v: &Value, st: &Study, path: &Path) -> Result<Indices, C
                 json,
                 r.outputs
                     .iter()
-                    .map(|o| (&o.first, &o.total, &o.first_ci, &o.total_ci, o.variance))
+                    .map(|o| {
+                        let rows = vec![
+                            ("S1".to_string(), o.first.clone(), o.first_ci.clone()),
+                            ("ST".to_string(), o.total.clone(), o.total_ci.clone()),
+                        ];
+                        (rows, o.variance)
+                    })
                     .collect(),
             )
         }
@@ -656,7 +667,6 @@ pub fn run(args: &Args) -> Result<(), CliError> {
     }
     write("indices.csv", csv)?;
     // Per direction: the variance-weighted index over the points.
-    let n_points = mo.outputs.iter().map(|o| o.1 + 1).max().unwrap_or(0);
     let mut agg_json = Vec::new();
     let mut agg_csv = format!(
         "direction,input{}\n",
@@ -718,7 +728,7 @@ pub fn run(args: &Args) -> Result<(), CliError> {
     }
     let json = serde_json::json!({
         "study": mo.info,
-        "n_points": n_points,
+        "n_points": mo.n_points,
         "aggregate": {
             "definition": "per direction and input: sum_p V_p S_p / sum_p V_p over the points' outputs of that direction (generalised Sobol index, Gamboa et al. 2014); V_p = output variance (sobol, pce) or sum of squared effects (morris: mu_star, local: |df/dx|·sd, with S_p the normalised squared effect)",
             "interval": "the same weighting of the per-output interval ends (conservative: outputs' errors taken as fully correlated, weights as exact)",
