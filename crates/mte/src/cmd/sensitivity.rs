@@ -435,14 +435,15 @@ struct Indices {
     weights: Vec<f64>,
 }
 
-/// Squared effects normalised per output, and their sum: for a linear model with independent
+/// Squared effects normalised per output (0 for an output without effect), and their sum: for a linear model with independent
 /// inputs, (|aᵢ|σᵢ)² / Σⱼ(|aⱼ|σⱼ)² is the first-order Sobol' index and the sum the variance.
 fn squared_shares(effects: &[&Vec<f64>]) -> (Vec<Vec<f64>>, Vec<f64>) {
     effects
         .iter()
         .map(|e| {
             let w: f64 = e.iter().map(|x| x * x).sum();
-            (e.iter().map(|x| x * x / w).collect(), w)
+            let share = |x: &f64| if w > 0.0 { x * x / w } else { 0.0 };
+            (e.iter().map(share).collect(), w)
         })
         .unzip()
 }
