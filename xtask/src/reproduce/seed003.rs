@@ -13,7 +13,7 @@
 //!   direction, of its S_T from the analytic S_T of the first-order model.
 
 use super::ReproduceError;
-use mte::pose_model::{Linearisation, PoseErrorModel};
+use mte::pose_model::{Linearisation, PoseErrorModel, diagonal_points};
 use mte_errors::Catalogue;
 use mte_errors::units::Kind;
 use mte_kinematics::Machine;
@@ -127,20 +127,7 @@ fn study() -> Result<Study, ReproduceError> {
             .collect(),
     )
     .map_err(fail)?;
-    let half = [400.0, 425.0, 275.0];
-    let mut points = Vec::new();
-    for (sy, sz) in [(1.0, 1.0), (-1.0, 1.0), (1.0, -1.0), (-1.0, -1.0)] {
-        for t in 0..5 {
-            let s = -1.0 + 0.5 * t as f64;
-            points.push(vec![
-                s * half[0],
-                s * sy * half[1],
-                s * sz * half[2],
-                0.0,
-                0.0,
-            ]);
-        }
-    }
+    let points = diagonal_points(&machine, 5).map_err(fail)?;
     let model = PoseErrorModel::new(
         &machine,
         &catalogue,

@@ -1,17 +1,27 @@
 //! `mte sensitivity <morris|sobol|pce|local> --problem problem.json --out DIR`: sensitivity of a
-//! built-in test model (ishigami, gfunction, linear) over the inputs of a problem file
-//! (format in docs/formats.md, "Sensitivity problem"). Writes result.json, indices.csv and
-//! indices.svg (bar chart with intervals).
+//! built-in test model (ishigami, gfunction, linear) over the inputs of a problem file, or of a
+//! machine's pose error at test points over the random entries of an error set (`"model":
+//! {"name": "machine", …}`; format in docs/formats.md, "Sensitivity problem"). Writes
+//! result.json, indices.csv and indices.svg (bar chart with intervals); for a machine, the
+//! indices per output (`p07.PX` …) in long format, and aggregate.csv / aggregate-PX.svg … with
+//! the variance-weighted index of each direction over the points.
 
 use clap::{Args as ClapArgs, ValueEnum};
 use indicatif::{ProgressBar, ProgressDrawTarget};
 use mte::CliError;
 use mte::plot::{Axis, Interval, error_bar_chart};
+use mte::pose_model::{
+    COMPONENTS, Linearisation, PoseErrorModel, PoseModelError, diagonal_points, generalised_index,
+    point_from_mm_deg, points_from_csv,
+};
+use mte_errors::units::Kind;
+use mte_errors::{Catalogue, ErrorSet};
+use mte_kinematics::AxisKind;
 use mte_sensitivity::testfn::{GFunction, Ishigami, Linear};
 use mte_sensitivity::{Model, Problem};
 use serde_json::Value;
 use std::io::IsTerminal;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 /// One row of the index table: input name, index values per output, and their intervals.
 type IndexRow = (String, Vec<f64>, Vec<[f64; 2]>);
@@ -121,116 +131,433 @@ fn params<T: serde::de::DeserializeOwned + Default>(
     }
 }
 
-/// Runs the subcommand.
-///
-/// # Errors
-/// Unreadable or invalid problem files (the message names the field), analysis errors, I/O errors.
-pub fn run(args: &Args) -> Result<(), CliError> {
-    let path = &args.problem;
-    let text = std::fs::read_to_string(path).map_err(|source| CliError::Io {
-        path: path.clone(),
-        source,
-    })?;
-    let v: Value = serde_json::from_str(&text)
-        .map_err(|e| CliError::Library(format!("{}: line {}: {e}", path.display(), e.line())))?;
-    let problem = Problem::from_json(&v).map_err(|e| lib(e, path))?;
-    let model_box = build_model(v.get("model").unwrap_or(&Value::Null), problem.dim(), path)?;
-    let model = Boxed(model_box.as_ref());
-    let names = problem.names();
-    // (label, [(index name, values, intervals)])
-    let (json, rows): (Value, Vec<IndexRow>) = match args.method {
+/// Micrometres per millimetre and arcseconds per radian: outputs are reported in µm and arcsec.
+const UM_PER_MM: f64 = 1000.0;
+const ARCSEC_PER_RAD: f64 = 180.0 * 3600.0 / std::f64::consts::PI;
+
+/// An output is left out when its first-order standard deviation is below this fraction of the
+/// largest one (µm and arcsec alike): it has no variance, and every estimator rejects it.
+const NO_VARIANCE: f64 = 1e-9;
+
+/// The pose-error model restricted to the outputs with variance, in µm and arcsec.
+struct DisplayUnits {
+    model: PoseErrorModel,
+    /// Output index in the full model and its scale (µm per mm or arcsec per rad).
+    keep: Vec<(usize, f64)>,
+}
+
+impl Model for DisplayUnits {
+    fn evaluate(&self, x: &[f64], y: &mut [f64]) {
+        self.evaluate_batch(1, x, y)
+    }
+    fn n_outputs(&self) -> usize {
+        self.keep.len()
+    }
+    fn evaluate_batch(&self, n: usize, xs: &[f64], ys: &mut [f64]) {
+        let m = self.model.n_outputs();
+        let mut full = vec![0.0; n * m];
+        self.model.evaluate_batch(n, xs, &mut full);
+        for (row, out) in full
+            .chunks_exact(m)
+            .zip(ys.chunks_exact_mut(self.keep.len()))
+        {
+            for (y, &(o, scale)) in out.iter_mut().zip(&self.keep) {
+                *y = row[o] * scale;
+            }
+        }
+    }
+}
+
+/// What a machine study adds to the report: the names and directions of the outputs analysed.
+struct MachineOutputs {
+    /// Name (`p07.PX`), point index and component index of each analysed output.
+    outputs: Vec<(String, usize, usize)>,
+    /// Outputs left out for having no variance.
+    dropped: Vec<String>,
+    /// Number of test points.
+    n_points: usize,
+    /// Description for result.json (machine, error set, points, inputs with their spread).
+    info: Value,
+}
+
+/// A problem and its model: a test function, or a machine's pose error.
+struct Study {
+    problem: Problem,
+    model: Box<dyn Model>,
+    machine: Option<MachineOutputs>,
+}
+
+fn field_err(path: &Path, field: &str, m: impl std::fmt::Display) -> CliError {
+    CliError::Library(format!("{}: field `{field}`: {m}", path.display()))
+}
+
+/// Test points of `model.points`, in mm and rad.
+fn parse_points(
+    v: Option<&Value>,
+    m: &mte_kinematics::Machine,
+    dir: &Path,
+    path: &Path,
+) -> Result<Vec<Vec<f64>>, CliError> {
+    let f = "model.points";
+    let expected =
+        "an array of points (mm, deg in axis order), {\"csv\": FILE} or {\"diagonals\": N}";
+    match v {
+        Some(Value::Array(a)) => a
+            .iter()
+            .enumerate()
+            .map(|(i, p)| {
+                let nums: Option<Vec<f64>> = p
+                    .as_array()
+                    .and_then(|a| a.iter().map(Value::as_f64).collect());
+                nums.map(|n| point_from_mm_deg(m, &n)).ok_or_else(|| {
+                    field_err(path, &format!("{f}[{i}]"), "expected an array of numbers")
+                })
+            })
+            .collect(),
+        Some(Value::Object(o)) => {
+            if let Some(c) = o.get("csv") {
+                let file =
+                    dir.join(c.as_str().ok_or_else(|| {
+                        field_err(path, &format!("{f}.csv"), "expected a file name")
+                    })?);
+                let text = std::fs::read_to_string(&file).map_err(|source| CliError::Io {
+                    path: file.clone(),
+                    source,
+                })?;
+                points_from_csv(m, &text, &file.display().to_string())
+                    .map_err(|e| field_err(path, &format!("{f}.csv"), e))
+            } else if let Some(n) = o.get("diagonals") {
+                let n = n.as_u64().ok_or_else(|| {
+                    field_err(
+                        path,
+                        &format!("{f}.diagonals"),
+                        "expected a whole number of points per diagonal",
+                    )
+                })?;
+                diagonal_points(m, n as usize)
+                    .map_err(|e| field_err(path, &format!("{f}.diagonals"), e))
+            } else {
+                Err(field_err(path, f, format!("expected {expected}")))
+            }
+        }
+        _ => Err(field_err(
+            path,
+            f,
+            format!("missing or malformed; expected {expected}"),
+        )),
+    }
+}
+
+/// The study of a problem file whose `model` is `{"name": "machine", …}`.
+fn machine_study(v: &Value, mv: &Value, path: &Path) -> Result<Study, CliError> {
+    for key in ["inputs", "correlation"] {
+        if v.get(key).is_some() {
+            return Err(field_err(
+                path,
+                key,
+                "not allowed with model `machine`: the inputs are the entries of the error set (`model.errors`) that carry a distribution",
+            ));
+        }
+    }
+    let dir = path.parent().unwrap_or(Path::new("."));
+    let text_of = |key: &str| -> Result<&str, CliError> {
+        mv.get(key)
+            .and_then(Value::as_str)
+            .ok_or_else(|| field_err(path, &format!("model.{key}"), "missing; expected a string"))
+    };
+    let name = text_of("machine")?;
+    let machine_arg = if mte_kinematics::Machine::library_names().contains(&name) {
+        name.to_string()
+    } else {
+        dir.join(name).display().to_string()
+    };
+    let machine =
+        super::machine::load(&machine_arg).map_err(|e| field_err(path, "model.machine", e))?;
+    let errors_path = dir.join(text_of("errors")?);
+    let set = ErrorSet::from_file(&errors_path).map_err(|e| field_err(path, "model.errors", e))?;
+    let mode = match mv.get("linearisation").map(|l| l.as_str()) {
+        None | Some(Some("first_order")) => Linearisation::FirstOrder,
+        Some(Some("exact")) => Linearisation::Exact,
+        _ => {
+            return Err(field_err(
+                path,
+                "model.linearisation",
+                "expected \"first_order\" or \"exact\"",
+            ));
+        }
+    };
+    let points = parse_points(mv.get("points"), &machine, dir, path)?;
+    let catalogue = Catalogue::for_machine(&machine);
+    let (problem, model) = PoseErrorModel::from_error_set(&machine, &catalogue, &set, points, mode)
+        .map_err(|e| match e {
+            PoseModelError::PointLength { .. }
+            | PoseModelError::NotFinite { .. }
+            | PoseModelError::NoPoints => field_err(path, "model.points", e),
+            e => field_err(
+                path,
+                "model.errors",
+                format!("{}: {e}", errors_path.display()),
+            ),
+        })?;
+    // Scale of each output and its first-order standard deviation, in µm or arcsec.
+    let names = model.output_names();
+    let scale = |o: usize| if o % 6 < 3 { UM_PER_MM } else { ARCSEC_PER_RAD };
+    let sd: Vec<f64> = (0..model.n_outputs())
+        .map(|o| {
+            let e = model.effect().row(o);
+            let var: f64 = problem
+                .inputs()
+                .iter()
+                .zip(e.iter())
+                .map(|(i, a)| (a * i.dist.sd()).powi(2))
+                .sum();
+            var.sqrt() * scale(o)
+        })
+        .collect();
+    let largest = sd.iter().fold(0.0f64, |a, &b| a.max(b));
+    let (kept, dropped): (Vec<usize>, Vec<usize>) =
+        (0..sd.len()).partition(|&o| sd[o] > NO_VARIANCE * largest);
+    let random = set.random_entries();
+    let inputs: Vec<Value> = random
+        .iter()
+        .zip(problem.inputs())
+        .map(|(&i, inp)| {
+            let (key, f) = match set.entries[i].kind {
+                Kind::Length => ("sd_um", UM_PER_MM),
+                Kind::Angle => ("sd_arcsec", ARCSEC_PER_RAD),
+            };
+            serde_json::json!({"name": inp.name, "field": set.entries[i].field, key: inp.dist.sd() * f})
+        })
+        .collect();
+    let axis_keys: Vec<(String, f64)> = machine
+        .axes()
+        .iter()
+        .map(|a| match a.kind {
+            AxisKind::Linear => (format!("{}_mm", a.name), 1.0),
+            AxisKind::Rotary => (format!("{}_deg", a.name), 180.0 / std::f64::consts::PI),
+        })
+        .collect();
+    let pts: Vec<Value> = model
+        .points()
+        .iter()
+        .enumerate()
+        .map(|(p, q)| {
+            let mut o = serde_json::Map::new();
+            o.insert(
+                "point".into(),
+                names[6 * p].split('.').next().unwrap_or("").into(),
+            );
+            for ((k, f), x) in axis_keys.iter().zip(q) {
+                o.insert(k.clone(), (x * f).into());
+            }
+            Value::Object(o)
+        })
+        .collect();
+    let info = serde_json::json!({
+        "machine": machine.name(),
+        "errors": errors_path.display().to_string(),
+        "linearisation": match mode { Linearisation::Exact => "exact", _ => "first_order" },
+        "units": "outputs: position in um, orientation in arcsec; indices are dimensionless",
+        "inputs": inputs,
+        "points": pts,
+        "outputs": kept.iter().map(|&o| names[o].clone()).collect::<Vec<_>>(),
+        "outputs_without_variance": dropped.iter().map(|&o| names[o].clone()).collect::<Vec<_>>(),
+    });
+    let n_points = model.points().len();
+    let outputs = kept
+        .iter()
+        .map(|&o| (names[o].clone(), o / 6, o % 6))
+        .collect();
+    let dropped = dropped.iter().map(|&o| names[o].clone()).collect();
+    let model = DisplayUnits {
+        keep: kept.iter().map(|&o| (o, scale(o))).collect(),
+        model,
+    };
+    Ok(Study {
+        problem,
+        model: Box::new(model),
+        machine: Some(MachineOutputs {
+            outputs,
+            dropped,
+            n_points,
+            info,
+        }),
+    })
+}
+
+fn study(v: &Value, path: &Path) -> Result<Study, CliError> {
+    let mv = v.get("model").unwrap_or(&Value::Null);
+    if mv.get("name").and_then(Value::as_str) == Some("machine") {
+        return machine_study(v, mv, path);
+    }
+    let problem = Problem::from_json(v).map_err(|e| lib(e, path))?;
+    let model = build_model(mv, problem.dim(), path)?;
+    Ok(Study {
+        problem,
+        model,
+        machine: None,
+    })
+}
+
+/// One index over outputs: its name, and per output the value and interval of each input.
+type OverOutputs = (String, Vec<Vec<f64>>, Vec<Vec<[f64; 2]>>);
+
+/// Sobol' and PCE: the rows (S1, ST) of each output, weighted by its variance.
+fn sobol_like(json: Value, per_output: Vec<(Vec<IndexRow>, f64)>) -> Indices {
+    let shares = ["S1", "ST"]
+        .iter()
+        .enumerate()
+        .map(|(j, l)| {
+            (
+                l.to_string(),
+                per_output.iter().map(|(r, _)| r[j].1.clone()).collect(),
+                per_output.iter().map(|(r, _)| r[j].2.clone()).collect(),
+            )
+        })
+        .collect();
+    let weights = per_output.iter().map(|p| p.1).collect();
+    Indices {
+        json,
+        rows: per_output.into_iter().map(|p| p.0).collect(),
+        shares,
+        weights,
+    }
+}
+
+/// Indices of one method for every output, and what the per-direction aggregate is built from.
+struct Indices {
+    json: Value,
+    /// Per output: (index name, value per input, interval per input or empty).
+    rows: Vec<Vec<IndexRow>>,
+    /// Per aggregated index: its name, and per output the shares and intervals to weight.
+    shares: Vec<OverOutputs>,
+    /// Weight of each output: its variance (Sobol', PCE) or the sum of its squared effects.
+    weights: Vec<f64>,
+}
+
+/// Squared effects normalised per output (0 for an output without effect), and their sum: for a linear model with independent
+/// inputs, (|aᵢ|σᵢ)² / Σⱼ(|aⱼ|σⱼ)² is the first-order Sobol' index and the sum the variance.
+fn squared_shares(effects: &[&Vec<f64>]) -> (Vec<Vec<f64>>, Vec<f64>) {
+    effects
+        .iter()
+        .map(|e| {
+            let w: f64 = e.iter().map(|x| x * x).sum();
+            let share = |x: &f64| if w > 0.0 { x * x / w } else { 0.0 };
+            (e.iter().map(share).collect(), w)
+        })
+        .unzip()
+}
+
+fn analyse(args: &Args, v: &Value, st: &Study, path: &Path) -> Result<Indices, CliError> {
+    let model = Boxed(st.model.as_ref());
+    let problem = &st.problem;
+    Ok(match args.method {
         Method::Sobol => {
-            let p: mte_sensitivity::sobol::SobolParams = params(&v, "sobol", path)?;
+            let p: mte_sensitivity::sobol::SobolParams = params(v, "sobol", path)?;
             let total = (p.n * (problem.dim() + 2)) as u64;
             let bar = ProgressBar::new(total);
             if !std::io::stderr().is_terminal() {
                 bar.set_draw_target(ProgressDrawTarget::hidden());
             }
-            let r = mte_sensitivity::sobol::sobol_with_progress(&model, &problem, &p, &|n: u64| {
+            let r = mte_sensitivity::sobol::sobol_with_progress(&model, problem, &p, &|n: u64| {
                 bar.inc(n)
             })
             .map_err(|e| lib(e, path))?;
             bar.finish_and_clear();
-            let o = &r.outputs[0];
-            let rows = vec![
-                ("S1".to_string(), o.first.clone(), o.first_ci.clone()),
-                ("ST".to_string(), o.total.clone(), o.total_ci.clone()),
-            ];
-            (serde_json::to_value(&r).expect("serialisable"), rows)
+            let json = serde_json::to_value(&r).expect("serialisable");
+            sobol_like(
+                json,
+                r.outputs
+                    .iter()
+                    .map(|o| {
+                        let rows = vec![
+                            ("S1".to_string(), o.first.clone(), o.first_ci.clone()),
+                            ("ST".to_string(), o.total.clone(), o.total_ci.clone()),
+                        ];
+                        (rows, o.variance)
+                    })
+                    .collect(),
+            )
         }
         Method::Pce => {
-            let p: mte_sensitivity::pce::PceParams = params(&v, "pce", path)?;
+            let p: mte_sensitivity::pce::PceParams = params(v, "pce", path)?;
             let r =
-                mte_sensitivity::pce::build_pce(&model, &problem, &p).map_err(|e| lib(e, path))?;
-            let o = &r.outputs[0];
+                mte_sensitivity::pce::build_pce(&model, problem, &p).map_err(|e| lib(e, path))?;
+            let worst = r
+                .outputs
+                .iter()
+                .max_by(|a, b| a.cv_error.total_cmp(&b.cv_error))
+                .expect("at least one output");
             eprintln!(
-                "PCE: degree {}, {} terms, K-fold CV error {:.3e}, corrected LOO {:.3e}",
-                o.degree,
-                o.terms.len(),
-                o.cv_error,
-                o.loo_error
+                "PCE ({} outputs, worst shown): degree {}, {} terms, K-fold CV error {:.3e}, corrected LOO {:.3e}",
+                r.outputs.len(),
+                worst.degree,
+                worst.terms.len(),
+                worst.cv_error,
+                worst.loo_error
             );
-            let rows = vec![
-                ("S1".to_string(), o.first.clone(), o.first_ci.clone()),
-                ("ST".to_string(), o.total.clone(), o.total_ci.clone()),
-            ];
-            (serde_json::to_value(&r).expect("serialisable"), rows)
+            let json = serde_json::to_value(&r).expect("serialisable");
+            sobol_like(
+                json,
+                r.outputs
+                    .iter()
+                    .map(|o| {
+                        let rows = vec![
+                            ("S1".to_string(), o.first.clone(), o.first_ci.clone()),
+                            ("ST".to_string(), o.total.clone(), o.total_ci.clone()),
+                        ];
+                        (rows, o.variance)
+                    })
+                    .collect(),
+            )
         }
         Method::Morris => {
-            let p: mte_sensitivity::morris::MorrisParams = params(&v, "morris", path)?;
+            let p: mte_sensitivity::morris::MorrisParams = params(v, "morris", path)?;
             let r =
-                mte_sensitivity::morris::morris(&model, &problem, &p).map_err(|e| lib(e, path))?;
-            let o = &r.outputs[0];
-            let rows = vec![
-                (
-                    "mu_star".to_string(),
-                    o.mu_star.clone(),
-                    o.mu_star_ci.clone(),
-                ),
-                ("sigma".to_string(), o.sigma.clone(), vec![]),
-            ];
-            (serde_json::to_value(&r).expect("serialisable"), rows)
-        }
-        Method::Local => {
-            let r = mte_sensitivity::local::gradient_spread(&model, &problem, 1e-4)
-                .map_err(|e| lib(e, path))?;
-            let rows = vec![("share".to_string(), r[0].share.clone(), vec![])];
-            (serde_json::to_value(&r).expect("serialisable"), rows)
-        }
-    };
-    std::fs::create_dir_all(&args.out).map_err(|source| CliError::Io {
-        path: args.out.clone(),
-        source,
-    })?;
-    let write = |name: &str, s: String| {
-        let p = args.out.join(name);
-        std::fs::write(&p, s).map_err(|source| CliError::Io { path: p, source })
-    };
-    write(
-        "result.json",
-        serde_json::to_string_pretty(&json).expect("json"),
-    )?;
-    let mut csv = String::from("input");
-    for (label, _, ci) in &rows {
-        csv.push_str(&format!(",{label}"));
-        if !ci.is_empty() {
-            csv.push_str(&format!(",{label}_low,{label}_high"));
-        }
-    }
-    csv.push('\n');
-    for (i, n) in names.iter().enumerate() {
-        csv.push_str(n);
-        for (_, vals, ci) in &rows {
-            csv.push_str(&format!(",{}", vals[i]));
-            if !ci.is_empty() {
-                csv.push_str(&format!(",{},{}", ci[i][0], ci[i][1]));
+                mte_sensitivity::morris::morris(&model, problem, &p).map_err(|e| lib(e, path))?;
+            let rows = r
+                .outputs
+                .iter()
+                .map(|o| {
+                    vec![
+                        (
+                            "mu_star".to_string(),
+                            o.mu_star.clone(),
+                            o.mu_star_ci.clone(),
+                        ),
+                        ("sigma".to_string(), o.sigma.clone(), vec![]),
+                    ]
+                })
+                .collect();
+            let (sh, weights) =
+                squared_shares(&r.outputs.iter().map(|o| &o.mu_star).collect::<Vec<_>>());
+            Indices {
+                json: serde_json::to_value(&r).expect("serialisable"),
+                rows,
+                shares: vec![("mu_star_share".into(), sh, vec![])],
+                weights,
             }
         }
-        csv.push('\n');
-    }
-    write("indices.csv", csv)?;
-    let (label, vals, ci) = &rows[rows.len().min(2) - 1];
-    let bars: Vec<Interval> = names
+        Method::Local => {
+            let r = mte_sensitivity::local::gradient_spread(&model, problem, 1e-4)
+                .map_err(|e| lib(e, path))?;
+            let rows = r
+                .iter()
+                .map(|o| vec![("share".to_string(), o.share.clone(), vec![])])
+                .collect();
+            let (sh, weights) = squared_shares(&r.iter().map(|o| &o.effect).collect::<Vec<_>>());
+            Indices {
+                json: serde_json::to_value(&r).expect("serialisable"),
+                rows,
+                shares: vec![("variance_share".into(), sh, vec![])],
+                weights,
+            }
+        }
+    })
+}
+
+fn bars(names: &[String], vals: &[f64], ci: &[[f64; 2]]) -> Vec<Interval> {
+    names
         .iter()
         .enumerate()
         .map(|(i, n)| {
@@ -245,18 +572,189 @@ pub fn run(args: &Args) -> Result<(), CliError> {
                 high: hi,
             }
         })
-        .collect();
+        .collect()
+}
+
+/// CSV header cells of the index columns.
+fn header(labels: impl Iterator<Item = (String, bool)>) -> String {
+    labels
+        .map(|(l, ci)| {
+            if ci {
+                format!(",{l},{l}_low,{l}_high")
+            } else {
+                format!(",{l}")
+            }
+        })
+        .collect()
+}
+
+/// Runs the subcommand.
+///
+/// # Errors
+/// Unreadable or invalid problem files (the message names the field), analysis errors, I/O errors.
+pub fn run(args: &Args) -> Result<(), CliError> {
+    let path = &args.problem;
+    let text = std::fs::read_to_string(path).map_err(|source| CliError::Io {
+        path: path.clone(),
+        source,
+    })?;
+    let v: Value = serde_json::from_str(&text)
+        .map_err(|e| CliError::Library(format!("{}: line {}: {e}", path.display(), e.line())))?;
+    let st = study(&v, path)?;
+    let names = st.problem.names();
+    let ix = analyse(args, &v, &st, path)?;
+    std::fs::create_dir_all(&args.out).map_err(|source| CliError::Io {
+        path: args.out.clone(),
+        source,
+    })?;
+    let write = |name: &str, s: String| {
+        let p = args.out.join(name);
+        std::fs::write(&p, s).map_err(|source| CliError::Io { path: p, source })
+    };
+    let Some(mo) = &st.machine else {
+        write(
+            "result.json",
+            serde_json::to_string_pretty(&ix.json).expect("json"),
+        )?;
+        let rows = &ix.rows[0];
+        let mut csv = format!(
+            "input{}\n",
+            header(rows.iter().map(|(l, _, ci)| (l.clone(), !ci.is_empty())))
+        );
+        for (i, n) in names.iter().enumerate() {
+            csv.push_str(n);
+            for (_, vals, ci) in rows {
+                csv.push_str(&format!(",{}", vals[i]));
+                if !ci.is_empty() {
+                    csv.push_str(&format!(",{},{}", ci[i][0], ci[i][1]));
+                }
+            }
+            csv.push('\n');
+        }
+        write("indices.csv", csv)?;
+        let (label, vals, ci) = &rows[rows.len().min(2) - 1];
+        write(
+            "indices.svg",
+            error_bar_chart(
+                &format!("{:?}: {label}", args.method),
+                &Axis::new(label.as_str(), ""),
+                &bars(&names, vals, ci),
+            )?,
+        )?;
+        println!(
+            "wrote {}/result.json, indices.csv, indices.svg",
+            args.out.display()
+        );
+        return Ok(());
+    };
+    // Long format: one row per output and input.
+    let rows0 = &ix.rows[0];
+    let mut csv = format!(
+        "output,point,component,unit,input{}\n",
+        header(rows0.iter().map(|(l, _, ci)| (l.clone(), !ci.is_empty())))
+    );
+    for ((oname, p, c), rows) in mo.outputs.iter().zip(&ix.rows) {
+        let unit = if *c < 3 { "um" } else { "arcsec" };
+        for (i, n) in names.iter().enumerate() {
+            csv.push_str(&format!("{oname},{},{},{unit},{n}", p + 1, COMPONENTS[*c]));
+            for (_, vals, ci) in rows {
+                csv.push_str(&format!(",{}", vals[i]));
+                if let Some(c) = ci.get(i) {
+                    csv.push_str(&format!(",{},{}", c[0], c[1]));
+                }
+            }
+            csv.push('\n');
+        }
+    }
+    write("indices.csv", csv)?;
+    // Per direction: the variance-weighted index over the points.
+    let mut agg_json = Vec::new();
+    let mut agg_csv = format!(
+        "direction,input{}\n",
+        header(
+            ix.shares
+                .iter()
+                .map(|(l, _, ci)| (l.clone(), !ci.is_empty()))
+        )
+    );
+    let mut charts = Vec::new();
+    for (c, dir) in COMPONENTS.iter().enumerate() {
+        let members: Vec<usize> = (0..mo.outputs.len())
+            .filter(|&o| mo.outputs[o].2 == c)
+            .collect();
+        if members.is_empty() {
+            continue;
+        }
+        let per: Vec<(String, Vec<f64>, Vec<[f64; 2]>)> = ix
+            .shares
+            .iter()
+            .filter_map(|(l, vals, ci)| {
+                generalised_index(vals, ci, &ix.weights, &members).map(|(a, b)| (l.clone(), a, b))
+            })
+            .collect();
+        if per.len() != ix.shares.len() {
+            continue;
+        }
+        for (i, n) in names.iter().enumerate() {
+            agg_csv.push_str(&format!("{dir},{n}"));
+            for (_, vals, ci) in &per {
+                agg_csv.push_str(&format!(",{}", vals[i]));
+                if let Some(c) = ci.get(i) {
+                    agg_csv.push_str(&format!(",{},{}", c[0], c[1]));
+                }
+            }
+            agg_csv.push('\n');
+        }
+        for (l, vals, ci) in &per {
+            agg_json.push(serde_json::json!({
+                "direction": dir, "index": l, "values": vals, "intervals": ci,
+                "n_outputs": members.len(),
+            }));
+        }
+        let (label, vals, ci) = per.last().expect("one index at least");
+        let file = format!("aggregate-{dir}.svg");
+        write(
+            &file,
+            error_bar_chart(
+                &format!(
+                    "{:?}: {label} of {dir}, variance-weighted over {} points",
+                    args.method,
+                    members.len()
+                ),
+                &Axis::new(label.as_str(), ""),
+                &bars(&names, vals, ci),
+            )?,
+        )?;
+        charts.push(file);
+    }
+    let json = serde_json::json!({
+        "study": mo.info,
+        "n_points": mo.n_points,
+        "aggregate": {
+            "definition": "per direction and input: sum_p V_p S_p / sum_p V_p over the points' outputs of that direction (generalised Sobol index, Gamboa et al. 2014); V_p = output variance (sobol, pce) or sum of squared effects (morris: mu_star, local: |df/dx|·sd, with S_p the normalised squared effect)",
+            "interval": "the same weighting of the per-output interval ends (conservative: outputs' errors taken as fully correlated, weights as exact)",
+            "indices": agg_json,
+        },
+        "result": ix.json,
+    });
     write(
-        "indices.svg",
-        error_bar_chart(
-            &format!("{:?}: {label}", args.method),
-            &Axis::new(label.as_str(), ""),
-            &bars,
-        )?,
+        "result.json",
+        serde_json::to_string_pretty(&json).expect("json"),
     )?;
+    write("aggregate.csv", agg_csv)?;
+    if !mo.dropped.is_empty() {
+        eprintln!(
+            "left out {} outputs without variance: {}",
+            mo.dropped.len(),
+            mo.dropped.join(", ")
+        );
+    }
     println!(
-        "wrote {}/result.json, indices.csv, indices.svg",
-        args.out.display()
+        "wrote {}/result.json, indices.csv ({} outputs × {} inputs), aggregate.csv, {}",
+        args.out.display(),
+        mo.outputs.len(),
+        names.len(),
+        charts.join(", ")
     );
     Ok(())
 }
