@@ -108,6 +108,14 @@ pub struct SobolResult {
     pub convergence: Vec<ConvergencePoint>,
 }
 
+/// Per-thread work buffers of one block: unit design, model inputs, model outputs.
+#[derive(Default)]
+struct Buffers {
+    u: Vec<f64>,
+    xs: Vec<f64>,
+    ys: Vec<f64>,
+}
+
 /// Rows per block for a base sample of n: at most ~1024 blocks.
 fn block_rows(n: usize) -> usize {
     let want = n.div_ceil(1024);
@@ -200,17 +208,20 @@ pub fn sobol_with_progress<M: Model + ?Sized>(
     partials
         .par_chunks_mut(m * s_len)
         .enumerate()
-        .try_for_each(|(b, out)| -> Result<()> {
+        // Buffers reused block after block by each thread (every value is overwritten).
+        .try_for_each_init(Buffers::default, |buf, (b, out)| -> Result<()> {
             let first = b * br;
             let rows = br.min(n - first);
-            let mut u = vec![0.0; rows * 2 * k];
-            design.fill(first, rows, &mut u);
+            let Buffers { u, xs, ys } = buf;
+            u.resize(rows * 2 * k, 0.0);
+            design.fill(first, rows, &mut u[..rows * 2 * k]);
+            let u = &mut u[..rows * 2 * k];
             for row in u.chunks_exact_mut(2 * k) {
                 let (a, bb) = row.split_at_mut(k);
                 problem.transform_unit(a);
                 problem.transform_unit(bb);
             }
-            let mut xs = vec![0.0; rows * runs_per_row * k];
+            xs.resize(rows * runs_per_row * k, 0.0);
             for r in 0..rows {
                 let a = &u[r * 2 * k..r * 2 * k + k];
                 let bb = &u[r * 2 * k + k..(r + 1) * 2 * k];
@@ -230,32 +241,55 @@ pub fn sobol_with_progress<M: Model + ?Sized>(
                     }
                 }
             }
-            let mut ys = vec![0.0; rows * runs_per_row * m];
-            eval_checked(model, rows * runs_per_row, k, &xs, &mut ys)?;
-            for o in 0..m {
-                let c = shift[o];
-                let t = &mut out[o * s_len..(o + 1) * s_len];
-                for r in 0..rows {
-                    let y = |run: usize| ys[(r * runs_per_row + run) * m + o] - c;
-                    let (fa, fb) = (y(0), y(1));
-                    t[0] += fa;
-                    t[1] += fa * fa;
-                    t[2] += fb;
-                    t[3] += fb * fb;
-                    for i in 0..k {
-                        let fab = y(2 + i);
-                        t[4 + i] += fb * (fab - fa);
-                        let d = fa - fab;
-                        t[4 + k + i] += d * d;
+            ys.resize(rows * runs_per_row * m, 0.0);
+            let (xs, ys) = (
+                &xs[..rows * runs_per_row * k],
+                &mut ys[..rows * runs_per_row * m],
+            );
+            eval_checked(model, rows * runs_per_row, k, xs, ys)?;
+            // Partial sums laid out [statistic][output]: the inner loops run over the outputs,
+            // contiguous in both the model values and the sums.
+            let (mut fa, mut fb) = (vec![0.0; m], vec![0.0; m]);
+            let (head, tail) = out.split_at_mut((4 + k) * m);
+            let (moments, first_sums) = head.split_at_mut(4 * m);
+            let (total_sums, second_sums) = tail.split_at_mut(k * m);
+            for r in 0..rows {
+                let run =
+                    |i: usize| &ys[(r * runs_per_row + i) * m..(r * runs_per_row + i + 1) * m];
+                for o in 0..m {
+                    fa[o] = run(0)[o] - shift[o];
+                    fb[o] = run(1)[o] - shift[o];
+                    moments[o] += fa[o];
+                    moments[m + o] += fa[o] * fa[o];
+                    moments[2 * m + o] += fb[o];
+                    moments[3 * m + o] += fb[o] * fb[o];
+                }
+                for ((t1, t2), i) in first_sums
+                    .chunks_exact_mut(m)
+                    .zip(total_sums.chunks_exact_mut(m))
+                    .zip(0..k)
+                {
+                    let values = run(2 + i).iter().zip(&shift).zip(fa.iter().zip(&fb));
+                    for ((t1, t2), ((y, c), (a, b))) in t1.iter_mut().zip(t2.iter_mut()).zip(values)
+                    {
+                        let fab = y - c;
+                        *t1 += b * (fab - a);
+                        let d = a - fab;
+                        *t2 += d * d;
                     }
-                    if so {
-                        let mut p = 4 + 2 * k;
-                        for j in 0..k {
-                            let fba = y(2 + k + j);
-                            for l in (j + 1)..k {
-                                t[p] += fba * y(2 + l) - fa * fb;
-                                p += 1;
+                }
+                if so {
+                    let mut p = 0;
+                    for j in 0..k {
+                        let fba_run = run(2 + k + j);
+                        for l in (j + 1)..k {
+                            let fab_run = run(2 + l);
+                            let t = &mut second_sums[p * m..(p + 1) * m];
+                            for o in 0..m {
+                                let fba = fba_run[o] - shift[o];
+                                t[o] += fba * (fab_run[o] - shift[o]) - fa[o] * fb[o];
                             }
+                            p += 1;
                         }
                     }
                 }
@@ -268,26 +302,26 @@ pub fn sobol_with_progress<M: Model + ?Sized>(
                     count: usize,
                     o: usize|
      -> Result<(Vec<f64>, Vec<f64>, f64, f64, Option<Vec<Vec<f64>>>)> {
-        let t = &sums[o * s_len..(o + 1) * s_len];
+        let t = |s: usize| sums[s * m + o];
         let nn = count as f64;
-        let s1 = t[0] + t[2];
-        let var = (t[1] + t[3] - s1 * s1 / (2.0 * nn)) / (2.0 * nn - 1.0);
+        let s1 = t(0) + t(2);
+        let var = (t(1) + t(3) - s1 * s1 / (2.0 * nn)) / (2.0 * nn - 1.0);
         let mean = s1 / (2.0 * nn) + shift[o];
-        let scale = (t[1] + t[3]) / (2.0 * nn);
+        let scale = (t(1) + t(3)) / (2.0 * nn);
         if !(var > 1e-13 * scale.max(f64::MIN_POSITIVE)) {
             return Err(Error::Degenerate {
                 output: o,
                 message: format!("output variance {var:.3e} is zero: no input has any effect"),
             });
         }
-        let first: Vec<f64> = (0..k).map(|i| t[4 + i] / nn / var).collect();
-        let total: Vec<f64> = (0..k).map(|i| t[4 + k + i] / (2.0 * nn) / var).collect();
+        let first: Vec<f64> = (0..k).map(|i| t(4 + i) / nn / var).collect();
+        let total: Vec<f64> = (0..k).map(|i| t(4 + k + i) / (2.0 * nn) / var).collect();
         let second = so.then(|| {
             let mut s2 = vec![vec![0.0; k]; k];
             let mut p = 4 + 2 * k;
             for j in 0..k {
                 for l in (j + 1)..k {
-                    let v = t[p] / nn / var - first[j] - first[l];
+                    let v = t(p) / nn / var - first[j] - first[l];
                     s2[j][l] = v;
                     s2[l][j] = v;
                     p += 1;

@@ -16,7 +16,10 @@ use mte_errors::evaluator::AxisState;
 use mte_errors::{Catalogue, ErrorSet, Evaluator};
 use mte_kinematics::{AxisKind, Machine};
 use mte_linalg::csv::{CsvError, CsvTable};
-use mte_linalg::nalgebra::{DMatrixView, DMatrixViewMut};
+use mte_linalg::bridge;
+use mte_linalg::faer::linalg::matmul::matmul;
+use mte_linalg::faer::{Accum, MatMut, MatRef, Par};
+use mte_linalg::nalgebra::DMatrixView;
 use mte_linalg::{DMat, DVec};
 use mte_sensitivity::{Distribution, Input, Model, Problem};
 
@@ -337,18 +340,20 @@ impl Model for PoseErrorModel {
         let m = self.n_outputs();
         match self.mode {
             Linearisation::FirstOrder => {
-                // Yᵀ (m × n column-major, i.e. Y row-major) = E · Xᵀ
-                let xt = DMatrixView::from_slice(xs, k, n_rows);
-                let mut yt = DMatrixViewMut::from_slice(ys, m, n_rows);
-                match &self.offset {
-                    None => yt.gemm(1.0, &self.effect, &xt, 0.0),
+                // Yᵀ (m × n column-major, i.e. Y row-major) = E · Xᵀ, by faer's product
+                // (sequential: batches are evaluated in parallel by the caller)
+                let xt = MatRef::from_column_major_slice(xs, k, n_rows);
+                let mut yt = MatMut::from_column_major_slice_mut(ys, m, n_rows);
+                let accum = match &self.offset {
+                    None => Accum::Replace,
                     Some((_, shift)) => {
-                        for mut col in yt.column_iter_mut() {
-                            col.copy_from(shift);
+                        for mut col in yt.as_mut().col_iter_mut() {
+                            col.copy_from(bridge::vec_as_faer(shift));
                         }
-                        yt.gemm(1.0, &self.effect, &xt, 1.0);
+                        Accum::Add
                     }
-                }
+                };
+                matmul(yt, accum, bridge::as_faer(&self.effect), xt, 1.0, Par::Seq);
             }
             Linearisation::Exact => {
                 let mut e = vec![0.0; self.machine.n_slots()];
