@@ -471,3 +471,38 @@ fn error_set_problems_give_clear_errors() {
             .contains("at least 2")
     );
 }
+
+/// The bundled seed 003 tolerance set (41 entries under the paper's names) reproduces the
+/// study's model: the same 41 parameters of `Catalogue::seed003` in the same order, σ = 5 µm and
+/// 10/3″, and the same effect matrix at the study's 20 points.
+#[test]
+fn seed003_tolerance_fixture_is_the_study() {
+    let m = Machine::library("seed003-ac-table").unwrap();
+    let study = Catalogue::seed003(&m).unwrap();
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../fixtures/errors/seed003-tolerances.json");
+    let set = mte_errors::ErrorSet::from_file(&path).unwrap();
+    let points = mte::pose_model::diagonal_points(&m, 5).unwrap();
+    let (problem, model) = PoseErrorModel::from_error_set(
+        &m,
+        &Catalogue::for_machine(&m),
+        &set,
+        points.clone(),
+        Linearisation::FirstOrder,
+    )
+    .unwrap();
+    let reference = PoseErrorModel::new(&m, &study, points, Linearisation::FirstOrder).unwrap();
+    assert_eq!(problem.dim(), 41);
+    let arcsec = std::f64::consts::PI / 648_000.0;
+    for (i, (name, input)) in problem.names().iter().zip(problem.inputs()).enumerate() {
+        let sd = input.dist.sd();
+        let want = if study.parameters()[i].quantity == mte_errors::units::Kind::Angle {
+            10.0 / 3.0 * arcsec
+        } else {
+            0.005
+        };
+        assert!((sd - want).abs() < 1e-12 * want, "{name}: σ {sd} vs {want}");
+    }
+    let diff = (model.effect() - reference.effect()).abs().max();
+    assert!(diff < 1e-12, "effect matrices differ by {diff}");
+}
