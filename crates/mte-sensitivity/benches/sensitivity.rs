@@ -4,7 +4,7 @@
 //! cargo bench -p mte-sensitivity --bench sensitivity
 
 use criterion::{Criterion, criterion_group, criterion_main};
-use mte_sensitivity::pce::{PceParams, build_pce};
+use mte_sensitivity::pce::{PceParams, Selection, build_pce};
 use mte_sensitivity::sobol::{SobolParams, sobol};
 use mte_sensitivity::testfn::GFunction;
 use mte_sensitivity::{Distribution, MultiOutput, Problem, Sampling};
@@ -115,6 +115,14 @@ fn benches(c: &mut Criterion) {
     };
     g.bench_function("pce_deg3_k41_n1000_kfold", |b| {
         b.iter(|| black_box(build_pce(&f, &prob, &p).unwrap()))
+    });
+    // The peers' setting (numpy OMP + corrected LOO): one path instead of K + 1.
+    let pl = PceParams {
+        selection: Selection::CorrectedLoo,
+        ..p.clone()
+    };
+    g.bench_function("pce_deg3_k41_n1000_corrected_loo", |b| {
+        b.iter(|| black_box(build_pce(&f, &prob, &pl).unwrap()))
     });
     let pa = PceParams {
         adaptive_degree: true,

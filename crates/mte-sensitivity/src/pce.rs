@@ -564,6 +564,9 @@ fn finish<S: pulp::Simd>(simd: S, acc: S::f64s, a: &[f64], b: &[f64]) -> f64 {
 /// not cached (their values do not depend on when they are computed, only the time does).
 const PREFETCH: usize = 4;
 
+/// Active-set size from which a path takes Ψ_vᵀq from a direct product ([`Path::direct`]).
+const DIRECT_AFTER: usize = 160;
+
 /// Largest number of cached Gram columns (each holds folds + 1 vectors of P values).
 const CACHE_BYTES: usize = 256 << 20;
 
@@ -641,7 +644,8 @@ struct Path {
     active: Vec<usize>,
     /// Held-out rows of each active column.
     held: Vec<Vec<f64>>,
-    q: Vec<Vec<f64>>,
+    /// Orthonormal basis Q of the active columns (n × p, column-major).
+    q: Vec<f64>,
     rinv: Vec<Vec<f64>>,
     rinv_f2: f64,
     qty: Vec<f64>,
@@ -658,6 +662,8 @@ struct Path {
     best_p: usize,
     state: Stop,
     kmax: usize,
+    /// Active-set size from which steps are [`Path::direct`].
+    direct_after: usize,
 }
 
 impl Path {
@@ -715,6 +721,7 @@ impl Path {
             best_p: 0,
             state: Stop::Running,
             kmax,
+            direct_after: DIRECT_AFTER,
         }
     }
 
@@ -752,14 +759,32 @@ impl Path {
             self.excluded[j] = true;
             let col = d.col(j);
             let mut v: Vec<f64> = (0..n).map(|i| col[i] * self.mask[i]).collect();
-            let p = self.q.len();
+            let p = self.active.len();
             let mut rc = vec![0.0; p + 1];
-            for _ in 0..2 {
-                for (t, qt) in self.q.iter().enumerate() {
-                    let dt: f64 = qt.iter().zip(&v).map(|(a, b)| a * b).sum();
-                    rc[t] += dt;
-                    for (vi, qi) in v.iter_mut().zip(qt) {
-                        *vi -= dt * qi;
+            if p > 0 {
+                // classical Gram–Schmidt twice (as accurate as modified G–S twice, in products)
+                let q = MatRef::from_column_major_slice(&self.q, n, p);
+                let mut dt = faer::Col::<f64>::zeros(p);
+                for _ in 0..2 {
+                    let vc = faer::ColRef::from_slice(&v);
+                    faer::linalg::matmul::matmul(
+                        dt.as_mat_mut(),
+                        Accum::Replace,
+                        q.transpose(),
+                        vc.as_mat(),
+                        1.0,
+                        Par::Seq,
+                    );
+                    faer::linalg::matmul::matmul(
+                        faer::ColMut::from_slice_mut(&mut v).as_mat_mut(),
+                        Accum::Add,
+                        q,
+                        dt.as_mat(),
+                        -1.0,
+                        Par::Seq,
+                    );
+                    for (r, d) in rc.iter_mut().zip(dt.iter()) {
+                        *r += d;
                     }
                 }
             }
@@ -798,7 +823,24 @@ impl Path {
     }
 
     /// Adds the pending candidate, given its Gram columns `g` (one per row variant).
-    fn commit(&mut self, y: &[f64], pend: Pending, g: &[Vec<f64>], use_hold: bool) {
+    /// Whether the next step takes Ψ_vᵀq from a direct product rather than from a Gram column
+    /// and U = Ψ_vᵀQ: once the active set is long, streaming U (P × p) costs more than the
+    /// product (n·P multiply-adds on data in cache), and U is no longer kept.
+    fn direct(&self) -> bool {
+        self.active.len() >= self.direct_after
+    }
+
+    /// Adds the pending candidate, given its Gram columns `g` (one per row variant; `None` for a
+    /// [`Path::direct`] step).
+    fn commit(
+        &mut self,
+        d: &Design,
+        y: &[f64],
+        pend: Pending,
+        g: Option<&[Vec<f64>]>,
+        use_hold: bool,
+        parallel: bool,
+    ) {
         let n = y.len();
         let Pending {
             j,
@@ -807,22 +849,32 @@ impl Path {
             rc,
             rkk,
         } = pend;
-        let p = self.q.len();
-        // Ψ_vᵀq_new = (Ψ_vᵀψ_j − U·r_c)/r_kk
-        let np = self.c.len();
-        let mut un = g[self.variant].clone();
-        if p > 0 {
-            let um = faer::ColMut::from_slice_mut(&mut un);
-            faer::linalg::matmul::matmul(
-                um.as_mat_mut(),
-                Accum::Add,
-                MatRef::from_column_major_slice(&self.u, np, p),
-                faer::ColRef::from_slice(&rc[..p]).as_mat(),
-                -1.0,
-                Par::Seq,
-            );
-        }
-        un.iter_mut().for_each(|a| *a /= rkk);
+        let p = self.active.len();
+        let un = match g {
+            // Ψ_vᵀq_new = (Ψ_vᵀψ_j − U·r_c)/r_kk
+            Some(g) => {
+                let np = self.c.len();
+                let mut un = g[self.variant].clone();
+                if p > 0 {
+                    let um = faer::ColMut::from_slice_mut(&mut un);
+                    faer::linalg::matmul::matmul(
+                        um.as_mat_mut(),
+                        Accum::Add,
+                        MatRef::from_column_major_slice(&self.u, np, p),
+                        faer::ColRef::from_slice(&rc[..p]).as_mat(),
+                        -1.0,
+                        Par::Seq,
+                    );
+                }
+                un.iter_mut().for_each(|a| *a /= rkk);
+                un
+            }
+            // q_new is zero on the held-out rows, so Ψᵀq_new over all rows is Ψ_vᵀq_new
+            None => d
+                .variant_products(&[&v], parallel)
+                .swap_remove(0)
+                .swap_remove(0),
+        };
         // R⁻¹ new column: −R⁻¹[:p,:p] r[:p] / rkk, diagonal 1/rkk
         let mut ic = vec![0.0; p + 1];
         for i in 0..p {
@@ -849,8 +901,10 @@ impl Path {
         for (c, ui) in self.c.iter_mut().zip(&un) {
             *c -= dd * ui;
         }
-        self.u.extend_from_slice(&un);
-        self.q.push(v);
+        if !self.direct() {
+            self.u.extend_from_slice(&un);
+        }
+        self.q.extend_from_slice(&v);
         // store R⁻¹ by columns: rinv[col][row]
         self.rinv.push(ic);
         self.active.push(j);
@@ -941,6 +995,7 @@ fn omp_select(
     y: &[f64],
     c0: Vec<Vec<f64>>,
     kmax_user: usize,
+    direct_after: usize,
     parallel: bool,
 ) -> Fit {
     let n = y.len();
@@ -951,7 +1006,9 @@ fn omp_select(
         .enumerate()
         .map(|(v, c)| {
             let nt = if v == 0 { n } else { n - d.segs[v - 1].1 };
-            Path::new(d, y, v, kmax(nt), col_norm2[v].clone(), c)
+            let mut path = Path::new(d, y, v, kmax(nt), col_norm2[v].clone(), c);
+            path.direct_after = direct_after;
+            path
         })
         .collect();
     loop {
@@ -968,15 +1025,17 @@ fn omp_select(
         } else {
             paths.iter_mut().enumerate().map(select).collect()
         };
-        let mut need: Vec<usize> = pending
+        let gram = |p: &Path, pe: &Option<Pending>| pe.is_some() && !p.direct();
+        let mut need: Vec<usize> = paths
             .iter()
-            .flatten()
-            .map(|p| p.j)
+            .zip(&pending)
+            .filter(|(p, pe)| gram(p, pe))
+            .filter_map(|(_, pe)| pe.as_ref().map(|pe| pe.j))
             .filter(|&j| !cache.has(j))
             .collect();
         if !need.is_empty() {
             for (p, pe) in paths.iter().zip(&pending) {
-                if pe.is_some() {
+                if gram(p, pe) {
                     need.extend(
                         p.likely_next(PREFETCH)
                             .into_iter()
@@ -988,24 +1047,24 @@ fn omp_select(
             need.dedup();
             cache.fill(d, &need, parallel);
         }
-        let work: Vec<(&mut Path, Pending, Arc<Vec<Vec<f64>>>)> = paths
+        let work: Vec<(&mut Path, Pending, Option<Arc<Vec<Vec<f64>>>>)> = paths
             .iter_mut()
             .zip(pending)
             .filter_map(|(p, pe)| {
                 let pe = pe?;
-                let g = match cache.get(pe.j) {
+                let g = (!p.direct()).then(|| match cache.get(pe.j) {
                     Some(g) => g,
                     None => {
                         cache.fill(d, &[pe.j], parallel);
                         cache.get(pe.j).expect("just filled")
                     }
-                };
+                });
                 Some((p, pe, g))
             })
             .collect();
-        let commit = |(p, pe, g): (&mut Path, Pending, Arc<Vec<Vec<f64>>>)| {
+        let commit = |(p, pe, g): (&mut Path, Pending, Option<Arc<Vec<Vec<f64>>>>)| {
             let hold = p.variant > 0;
-            p.commit(y, pe, &g, hold)
+            p.commit(d, y, pe, g.as_deref().map(Vec::as_slice), hold, parallel)
         };
         if parallel {
             work.into_par_iter().for_each(commit);
@@ -1323,6 +1382,7 @@ pub fn fit_pce(
                         &ys[o],
                         c0,
                         kmax_user,
+                        DIRECT_AFTER,
                         parallel_inner,
                     )
                 })
@@ -1554,6 +1614,52 @@ mod tests {
         for v in 0..all.len() {
             assert_eq!(alone[v][0], all[v][3]);
             assert_eq!(shuffled[v][1], all[v][3]);
+        }
+    }
+
+    /// The two ways a path updates its correlations — Gram column and U = Ψ_vᵀQ, or the direct
+    /// product Ψ_vᵀq — choose the same terms and coefficients, with and without folds.
+    #[test]
+    fn direct_and_gram_updates_agree() {
+        let (n, k, deg) = (120, 3, 3);
+        let germs = [Germ::Normal; 3];
+        let xi: Vec<f64> = (0..n * k)
+            .map(|i| ((i * 7919 % 1009) as f64 / 1009.0 - 0.5) * 3.4)
+            .collect();
+        let y: Vec<f64> = xi
+            .chunks(k)
+            .map(|x| (1.3 * x[0]).sin() + 0.4 * x[1] * x[2] + 0.1 * (2.0 * x[2]).cos())
+            .collect();
+        let basis = multi_indices(k, deg, 1.0);
+        for segs in [vec![(0, n)], vec![(0, 40), (40, 40), (80, 40)]] {
+            let d = Design::new(&xi, n, k, &germs, deg, &basis, segs);
+            let fit = |direct_after: usize| {
+                let c0 = d
+                    .variant_products(&[&y], false)
+                    .into_iter()
+                    .map(|mut v| v.swap_remove(0))
+                    .collect();
+                omp_select(
+                    &d,
+                    &GramCache::new(&d),
+                    &d.norms2(),
+                    &y,
+                    c0,
+                    60,
+                    direct_after,
+                    false,
+                )
+            };
+            let (gram, direct) = (fit(usize::MAX), fit(0));
+            assert_eq!(gram.steps, direct.steps);
+            assert!(gram.terms.len() > 3);
+            for (a, b) in gram.terms.iter().zip(&direct.terms) {
+                assert_eq!(a.0, b.0);
+                assert!(
+                    (a.1 - b.1).abs() <= 1e-9 * (1.0 + a.1.abs()),
+                    "{a:?} vs {b:?}"
+                );
+            }
         }
     }
 }
