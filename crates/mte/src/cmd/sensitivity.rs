@@ -14,7 +14,7 @@ use mte::pose_model::{
     COMPONENTS, Linearisation, PoseErrorModel, PoseModelError, diagonal_points, generalised_index,
     point_from_mm_deg, points_from_csv,
 };
-use mte_errors::units::Kind;
+use mte_errors::units::{Kind, Unit};
 use mte_errors::{Catalogue, ErrorSet};
 use mte_kinematics::AxisKind;
 use mte_sensitivity::testfn::{GFunction, Ishigami, Linear};
@@ -131,9 +131,13 @@ fn params<T: serde::de::DeserializeOwned + Default>(
     }
 }
 
-/// Micrometres per millimetre and arcseconds per radian: outputs are reported in µm and arcsec.
-const UM_PER_MM: f64 = 1000.0;
-const ARCSEC_PER_RAD: f64 = 180.0 * 3600.0 / std::f64::consts::PI;
+/// Factor from the internal unit (mm, rad) to the one this report uses (µm, arcsec).
+fn display_scale(kind: Kind) -> f64 {
+    match kind {
+        Kind::Length => 1.0 / Unit::Um.to_internal(),
+        Kind::Angle => 1.0 / Unit::Arcsec.to_internal(),
+    }
+}
 
 /// An output is left out when its first-order standard deviation is below this fraction of the
 /// largest one (µm and arcsec alike): it has no variance, and every estimator rejects it.
@@ -301,7 +305,7 @@ fn machine_study(v: &Value, mv: &Value, path: &Path) -> Result<Study, CliError> 
         })?;
     // Scale of each output and its first-order standard deviation, in µm or arcsec.
     let names = model.output_names();
-    let scale = |o: usize| if o % 6 < 3 { UM_PER_MM } else { ARCSEC_PER_RAD };
+    let scale = |o: usize| display_scale(if o % 6 < 3 { Kind::Length } else { Kind::Angle });
     let sd: Vec<f64> = (0..model.n_outputs())
         .map(|o| {
             let e = model.effect().row(o);
@@ -322,10 +326,12 @@ fn machine_study(v: &Value, mv: &Value, path: &Path) -> Result<Study, CliError> 
         .iter()
         .zip(problem.inputs())
         .map(|(&i, inp)| {
-            let (key, f) = match set.entries[i].kind {
-                Kind::Length => ("sd_um", UM_PER_MM),
-                Kind::Angle => ("sd_arcsec", ARCSEC_PER_RAD),
+            let kind = set.entries[i].kind;
+            let key = match kind {
+                Kind::Length => "sd_um",
+                Kind::Angle => "sd_arcsec",
             };
+            let f = display_scale(kind);
             serde_json::json!({"name": inp.name, "field": set.entries[i].field, key: inp.dist.sd() * f})
         })
         .collect();
