@@ -344,7 +344,7 @@ impl Design {
                     .collect()
             })
             .collect();
-        self.combine_segments(1, |j| &per_seg[j])
+        self.combine_segments(1, true, |j| &per_seg[j])
             .into_iter()
             .map(|mut v| v.pop().expect("one right-hand side"))
             .collect()
@@ -358,30 +358,31 @@ impl Design {
         let w = b.len();
         let n_seg = self.segs.len();
         let arch = pulp::Arch::new();
-        let work = |Group { parent, children }: &Group| {
-            // z[c] = b_c ⊙ parent column
-            let z: Vec<Vec<f64>> = b
-                .iter()
-                .map(|bc| match parent {
-                    Some(pc) => bc.iter().zip(pc).map(|(x, y)| x * y).collect(),
-                    None => bc.to_vec(),
-                })
-                .collect();
+        // z (W × n, reused by each thread) holds b_c ⊙ parent column
+        let work = |z: &mut Vec<f64>, Group { parent, children }: &Group| {
+            z.clear();
+            for bc in b {
+                match parent {
+                    Some(pc) => z.extend(bc.iter().zip(pc).map(|(x, y)| x * y)),
+                    None => z.extend_from_slice(bc),
+                }
+            }
             let mut out = vec![0.0; children.len() * w * n_seg];
             arch.dispatch(GroupProducts {
                 design: self,
                 children,
-                z: &z,
+                z,
                 out: &mut out,
             });
             out
         };
         let parts: Vec<Vec<f64>> = if parallel {
-            self.groups.par_iter().map(work).collect()
+            self.groups.par_iter().map_init(Vec::new, work).collect()
         } else {
-            self.groups.iter().map(work).collect()
+            let mut z = Vec::new();
+            self.groups.iter().map(|g| work(&mut z, g)).collect()
         };
-        self.combine_segments(w, |j| {
+        self.combine_segments(w, parallel, |j| {
             let (g, i) = self.place[j];
             &parts[g][i * w * n_seg..(i + 1) * w * n_seg]
         })
@@ -392,23 +393,30 @@ impl Design {
     fn combine_segments<'a>(
         &self,
         w: usize,
-        block: impl Fn(usize) -> &'a [f64],
+        parallel: bool,
+        block: impl Fn(usize) -> &'a [f64] + Sync,
     ) -> Vec<Vec<Vec<f64>>> {
         let n_seg = self.segs.len();
         let n_var = if n_seg > 1 { n_seg + 1 } else { 1 };
-        let mut out = vec![vec![vec![0.0; self.p]; w]; n_var];
-        for j in 0..self.p {
-            for (c, seg) in block(j).chunks_exact(n_seg).enumerate() {
-                let full: f64 = seg.iter().sum();
-                out[0][c][j] = full;
-                if n_var > 1 {
-                    for (s, v) in seg.iter().enumerate() {
-                        out[s + 1][c][j] = full - v;
-                    }
-                }
-            }
-        }
-        out
+        let one = |vc: usize| -> Vec<f64> {
+            let (v, c) = (vc / w, vc % w);
+            (0..self.p)
+                .map(|j| {
+                    let seg = &block(j)[c * n_seg..(c + 1) * n_seg];
+                    let full: f64 = seg.iter().sum();
+                    if v == 0 { full } else { full - seg[v - 1] }
+                })
+                .collect()
+        };
+        let vectors: Vec<Vec<f64>> = if parallel {
+            (0..n_var * w).into_par_iter().map(one).collect()
+        } else {
+            (0..n_var * w).map(one).collect()
+        };
+        let mut vectors = vectors.into_iter();
+        (0..n_var)
+            .map(|_| vectors.by_ref().take(w).collect())
+            .collect()
     }
 }
 
@@ -417,7 +425,8 @@ impl Design {
 struct GroupProducts<'a> {
     design: &'a Design,
     children: &'a [(usize, usize)],
-    z: &'a [Vec<f64>],
+    /// W right-hand sides of n values each, one after the other.
+    z: &'a [f64],
     out: &'a mut [f64],
 }
 
@@ -432,13 +441,14 @@ impl pulp::WithSimd for GroupProducts<'_> {
             z,
             out,
         } = self;
-        let (w, n_seg) = (z.len(), design.segs.len());
+        let (n, n_seg) = (design.n, design.segs.len());
+        let w = z.len() / n;
         let mut put = |i: usize, c: usize, s: usize, v: f64| out[(i * w + c) * n_seg + s] = v;
         let nc = children.len();
         let w4 = w - w % 4;
         for (s, &(r0, len)) in design.segs.iter().enumerate() {
             let a = |i: usize| &design.uni_col(children[i].1)[r0..r0 + len];
-            let zc = |c: usize| &z[c][r0..r0 + len];
+            let zc = |c: usize| &z[c * n + r0..c * n + r0 + len];
             // Right-hand sides four at a time: children in pairs, then the odd one.
             for c in (0..w4).step_by(4) {
                 let zs = [zc(c), zc(c + 1), zc(c + 2), zc(c + 3)];
