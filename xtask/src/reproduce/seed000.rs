@@ -407,12 +407,54 @@ pub struct Study {
 /// # Errors
 /// [`ReproduceError::Failed`] naming the step that failed.
 pub fn run() -> Result<Study, ReproduceError> {
-    let machine = Machine::library(MACHINE).map_err(fail)?;
-    let catalogue = Catalogue::seed000(&machine).map_err(fail)?;
-    let sources = sources(&machine, &catalogue)?;
+    study(&Machine::library(MACHINE).map_err(fail)?)
+}
+
+/// Table 3's rt (mm), read as a real lever: the tool-frame part of the NC command of eq 2,
+/// `… + q6 + q_t + r_t`, taken as a tool point 4500 mm from the spindle frame along the tool axis.
+const RT_MM: f64 = 4500.0;
+
+/// The seed 000 machine with Table 3's rt = 4500 read as a real lever: the tool body's offset is
+/// (0, 0, −rt) instead of our 150 mm tool, and the workpiece sits rt − 150 mm lower on the X
+/// table (qw_z = 250 − 4350 mm) so that the tool point reaches the S piece with Z, Y, X inside
+/// their strokes. Every lever from an error's frame to the tool point then grows by 4.35 m:
+/// along the tool axis for the tool branch, and in −z from the X carriage for the workpiece
+/// branch (the X pitch and roll levers).
+///
+/// # Errors
+/// [`ReproduceError::Failed`] when the bundled machine text cannot be edited or parsed.
+pub fn rt_lever_machine() -> Result<Machine, ReproduceError> {
+    let text = Machine::library_json(MACHINE).ok_or_else(|| fail("no bundled machine text"))?;
+    let mut v: serde_json::Value = serde_json::from_str(text).map_err(fail)?;
+    fn offset_z<'a>(
+        v: &'a mut serde_json::Value,
+        name: &str,
+    ) -> Result<&'a mut serde_json::Value, ReproduceError> {
+        v["bodies"]
+            .as_array_mut()
+            .and_then(|bodies| bodies.iter_mut().find(|b| b["name"] == name))
+            .map(|b| &mut b["offset_mm"][2])
+            .filter(|z| z.is_number())
+            .ok_or_else(|| fail(format!("body {name} has no offset_mm")))
+    }
+    let tool_z = offset_z(&mut v, "tool")?;
+    let lowered_by = RT_MM + tool_z.as_f64().unwrap_or(0.0);
+    *tool_z = (-RT_MM).into();
+    let wp_z = offset_z(&mut v, "workpiece")?;
+    *wp_z = (wp_z.as_f64().unwrap_or(0.0) - lowered_by).into();
+    Machine::from_json_str(&v.to_string()).map_err(fail)
+}
+
+/// The study on a given machine (the seed 000 gantry or a variant of its geometry).
+///
+/// # Errors
+/// [`ReproduceError::Failed`] naming the step that failed.
+pub fn study(machine: &Machine) -> Result<Study, ReproduceError> {
+    let catalogue = Catalogue::seed000(machine).map_err(fail)?;
+    let sources = sources(machine, &catalogue)?;
     let lines = s_piece();
-    let poses = poses(&machine, &lines)?;
-    let effects = effects(&machine, &catalogue, &poses)?;
+    let poses = poses(machine, &lines)?;
+    let effects = effects(machine, &catalogue, &poses)?;
     let sens = sensitivities(&lines, &effects);
     let (rate, ds) = increments(&sources, &poses, POINTS_PER_LINE);
     let motion = motion_increment(&sens, &rate, &ds).map_err(fail)?;
@@ -694,6 +736,98 @@ pub fn generate() -> Result<String, ReproduceError> {
             .join(", ")
     );
 
+    let rt = study(&rt_lever_machine()?)?;
+    let rt_m = ranking(&rt.motion);
+    let rt_t = ranking(&rt.motion_tip);
+    let _ = writeln!(
+        w,
+        "## Reading rt = 4500 as a lever\n\n\
+         A side study; the result above is unchanged. Table 3 lists rt = 4500 mm beside the q \
+         vectors. In eq 2 the tool chain ends `… + q6 + q6e + s6 + q_t + r_t`, r_t being the NC \
+         command's projection on the tool frame; our model reads it as a command projection and \
+         uses a 150 mm tool. Read instead as a real vector of length rt along the tool axis (the \
+         only direction a scalar can give in the tool frame), the tool point lies {RT_MM:.0} mm \
+         from the spindle frame. For that point still to cut the S piece with X, Y, Z inside \
+         their strokes, the part must sit {:.0} mm lower on the X table (qw_z = 250 − {:.0} mm); \
+         the poses are recomputed by the inverse kinematics. This changes two groups of levers \
+         at once: tool-branch angular errors (Y, Z, C, A, spindle, their squareness) gain {:.0} mm \
+         along the tool axis, and the X carriage's pitch and roll gain {:.0} mm in −z to the \
+         part. Tolerances, test piece and method are as above.\n",
+        RT_MM - 150.0,
+        RT_MM - 150.0,
+        RT_MM - 150.0,
+        RT_MM - 150.0,
+    );
+    let _ = write!(w, "Axis ranges over the 50 poses:");
+    for (a, name) in ["X", "Y", "Z", "C", "A"].iter().enumerate() {
+        let (lo, hi) = rt
+            .poses
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), q| {
+                (l.min(q[a]), h.max(q[a]))
+            });
+        let f = if a >= 3 { 180.0 / PI } else { 1.0 };
+        let u = if a >= 3 { "°" } else { " mm" };
+        let _ = write!(w, " {name} [{:.1}, {:.1}]{u};", lo * f, hi * f);
+    }
+    let _ = writeln!(
+        w,
+        "\n\n| E, method | leading six with rt = 4500 | their sum | the paper's six: ranks, sum (150 mm tool → rt) |\n|---|---|---|---|"
+    );
+    for (label, ix, r, base, base_r) in [
+        (
+            "normal deviation, motion increment",
+            &rt.motion,
+            &rt_m,
+            &st.motion,
+            &rank_m,
+        ),
+        (
+            "tool-tip vector (eqs 1–5), motion increment",
+            &rt.motion_tip,
+            &rt_t,
+            &st.motion_tip,
+            &rank_t,
+        ),
+    ] {
+        let ranks: Vec<String> = six
+            .iter()
+            .map(|&i| format!("{} → {}", pos(base_r, i), pos(r, i)))
+            .collect();
+        let _ = writeln!(
+            w,
+            "| {label} | {} | {:.3} | {}; sum {:.3} → {:.3} |",
+            names(r, 6),
+            top_share(ix, 6),
+            ranks.join(", "),
+            six_share(base),
+            six_share(ix)
+        );
+    }
+    let _ = writeln!(w);
+    let mut xs = String::new();
+    for n in ["εy(x)", "εx(x)"] {
+        let i = cat
+            .index_of(n)
+            .ok_or_else(|| fail(format!("no parameter {n}")))?;
+        let _ = write!(
+            xs,
+            "{n}: E {:.3} → {:.3} µm, S {:.4} → {:.4}, rank {} → {} (tool-tip E: rank {} → {}); ",
+            st.motion.effect[i] * 1e3,
+            rt.motion.effect[i] * 1e3,
+            st.motion.share[i],
+            rt.motion.share[i],
+            pos(&rank_m, i),
+            pos(&rt_m, i),
+            pos(&rank_t, i),
+            pos(&rt_t, i),
+        );
+    }
+    let _ = writeln!(
+        w,
+        "X pitch and roll (normal deviation unless marked): {}\n",
+        xs.trim_end_matches("; ")
+    );
     let _ = writeln!(w, "## All 53 parameters\n");
     let _ = writeln!(
         w,
@@ -834,6 +968,45 @@ mod tests {
                     assert!(
                         (exact - lin).abs() < 1e-8,
                         "param {n} pose {p}: {exact} vs {lin}"
+                    );
+                }
+            }
+        }
+    }
+
+    /// The rt = 4500 variant: the tool body sits 4500 mm from the spindle frame, the part 4350 mm
+    /// lower, its poses still cut the S piece, and the X carriage's pitch and roll gain exactly
+    /// the 4350 mm lever: a unit εy(x) (εx(x)) moves the tool tip by ω × r with r the tip seen
+    /// from the X carriage, so the two machines' tip sensitivities differ by ω × (0, 0, −4350),
+    /// i.e. 4350 mm along x (y) and nothing else, at every line.
+    #[test]
+    fn rt_lever_moves_the_tool_point_and_lengthens_the_x_levers() {
+        let (m, c, l, q) = setup();
+        let rt = rt_lever_machine().unwrap();
+        let body = |m: &Machine, name: &str| m.bodies()[m.body_index(name).unwrap()].offset_mm;
+        assert_eq!(body(&rt, "tool"), Vec3::new(0.0, 0.0, -RT_MM));
+        assert_eq!(
+            body(&rt, "workpiece"),
+            body(&m, "workpiece") - Vec3::z() * (RT_MM - 150.0)
+        );
+        let q_rt = poses(&rt, &l).unwrap();
+        for (g, qi) in l.iter().zip(&q_rt) {
+            let t = rt.tool_in_workpiece(qi, &[]);
+            assert!((t.translation.vector - g.tip_mm).norm() < 1e-9);
+            assert!((t.rotation * Vec3::z() - g.axis).norm() < 1e-12);
+        }
+        let tip = tip_sensitivities(&effects(&m, &c, &q).unwrap());
+        let tip_rt = tip_sensitivities(&effects(&rt, &c, &q_rt).unwrap());
+        for (name, along) in [("εy(x)", 0usize), ("εx(x)", 1)] {
+            let n = c.index_of(name).unwrap();
+            for p in 0..LINES {
+                for k in 0..3 {
+                    let d = (tip_rt[k][n][p] - tip[k][n][p]).abs();
+                    let want = if k == along { RT_MM - 150.0 } else { 0.0 };
+                    // mm per rad; the levers are exact sums of Table 3 offsets.
+                    assert!(
+                        (d - want).abs() < 1e-6,
+                        "{name} line {p} component {k}: {d}"
                     );
                 }
             }
