@@ -526,6 +526,30 @@ fn fmt_tol(p: &mte_errors::Parameter, tol: f64) -> String {
     }
 }
 
+/// Smallest and largest value of axis `a` over the poses.
+fn axis_range(poses: &[Vec<f64>], a: usize) -> (f64, f64) {
+    poses
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), q| {
+            (l.min(q[a]), h.max(q[a]))
+        })
+}
+
+/// "Axis ranges over the 50 poses: X [lo, hi] mm; …" (rotary axes in degrees).
+fn axis_ranges_line(poses: &[Vec<f64>]) -> String {
+    let mut s = String::from("Axis ranges over the 50 poses:");
+    for (a, name) in ["X", "Y", "Z", "C", "A"].iter().enumerate() {
+        let (lo, hi) = axis_range(poses, a);
+        let (f, u) = if a >= 3 {
+            (180.0 / PI, "°")
+        } else {
+            (1.0, " mm")
+        };
+        let _ = write!(s, " {name} [{:.1}, {:.1}]{u};", lo * f, hi * f);
+    }
+    s
+}
+
 /// Generates the Markdown text of `docs/reproduction/seed000.md`.
 ///
 /// # Errors
@@ -603,22 +627,7 @@ pub fn generate() -> Result<String, ReproduceError> {
         ASSEMBLY_MM * 1e3,
         ANGLE_ZERO_RAD * 1e6
     );
-    let range = |a: usize| {
-        let (lo, hi) = st
-            .poses
-            .iter()
-            .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), q| {
-                (l.min(q[a]), h.max(q[a]))
-            });
-        (lo, hi)
-    };
-    let _ = write!(w, "Axis ranges over the 50 poses:");
-    for (a, name) in ["X", "Y", "Z", "C", "A"].iter().enumerate() {
-        let (lo, hi) = range(a);
-        let f = if a >= 3 { 180.0 / PI } else { 1.0 };
-        let u = if a >= 3 { "°" } else { " mm" };
-        let _ = write!(w, " {name} [{:.1}, {:.1}]{u};", lo * f, hi * f);
-    }
+    let _ = write!(w, "{}", axis_ranges_line(&st.poses));
     let _ = writeln!(w, "\n");
 
     let _ = writeln!(w, "## The leading parameters\n");
@@ -682,7 +691,7 @@ pub fn generate() -> Result<String, ReproduceError> {
         .filter(|(src, _)| matches!(src, Source::Constant { .. }))
         .map(|(_, s)| s)
         .sum();
-    let (xlo, xhi) = range(0);
+    let (xlo, xhi) = axis_range(&st.poses, 0);
     let _ = writeln!(
         w,
         "## Verdict\n\n\
@@ -758,18 +767,7 @@ pub fn generate() -> Result<String, ReproduceError> {
         RT_MM - 150.0,
         RT_MM - 150.0,
     );
-    let _ = write!(w, "Axis ranges over the 50 poses:");
-    for (a, name) in ["X", "Y", "Z", "C", "A"].iter().enumerate() {
-        let (lo, hi) = rt
-            .poses
-            .iter()
-            .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), q| {
-                (l.min(q[a]), h.max(q[a]))
-            });
-        let f = if a >= 3 { 180.0 / PI } else { 1.0 };
-        let u = if a >= 3 { "°" } else { " mm" };
-        let _ = write!(w, " {name} [{:.1}, {:.1}]{u};", lo * f, hi * f);
-    }
+    let _ = write!(w, "{}", axis_ranges_line(&rt.poses));
     let _ = writeln!(
         w,
         "\n\n| E, method | leading six with rt = 4500 | their sum | the paper's six: ranks, sum (150 mm tool → rt) |\n|---|---|---|---|"
@@ -829,11 +827,7 @@ pub fn generate() -> Result<String, ReproduceError> {
         xs.trim_end_matches("; ")
     );
     let span = |poses: &[Vec<f64>], a: usize| {
-        let (lo, hi) = poses
-            .iter()
-            .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), q| {
-                (l.min(q[a]), h.max(q[a]))
-            });
+        let (lo, hi) = axis_range(poses, a);
         hi - lo
     };
     let pitch = cat
