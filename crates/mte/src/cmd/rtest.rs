@@ -70,14 +70,6 @@ fn lib(e: impl std::fmt::Display) -> CliError {
     CliError::Library(e.to_string())
 }
 
-fn load_machine(name: &str) -> Result<Machine, CliError> {
-    if Path::new(name).exists() {
-        Machine::from_file(Path::new(name)).map_err(lib)
-    } else {
-        Machine::library(name).map_err(lib)
-    }
-}
-
 fn parse_errors(m: &Machine, s: &str) -> Result<Vec<f64>, CliError> {
     let mut e = vec![0.0; m.n_slots()];
     for item in s.split(',').map(str::trim).filter(|x| !x.is_empty()) {
@@ -226,7 +218,7 @@ pub fn run(args: &Args) -> Result<(), CliError> {
             seed,
             out,
         } => {
-            let m = load_machine(machine)?;
+            let m = super::machine::load(machine)?;
             let e = parse_errors(&m, errors)?;
             let mut plan = Vec::new();
             for (k, b) in ball.iter().enumerate() {

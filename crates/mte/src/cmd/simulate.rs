@@ -58,19 +58,6 @@ fn read(p: &Path) -> Result<String, CliError> {
 }
 
 /// A library machine name or an mte-machine/1 file.
-fn load_machine(name_or_file: &str) -> Result<Machine, CliError> {
-    if Machine::library_names().contains(&name_or_file) {
-        Machine::library(name_or_file).map_err(lib)
-    } else if Path::new(name_or_file).exists() {
-        Machine::from_file(Path::new(name_or_file)).map_err(lib)
-    } else {
-        Err(CliError::Usage(format!(
-            "--machine: `{name_or_file}` is neither a library machine ({}) nor an existing file",
-            Machine::library_names().join(", ")
-        )))
-    }
-}
-
 fn to_internal(m: &Machine, axis: usize, v: f64) -> f64 {
     if m.axes()[axis].kind == AxisKind::Rotary {
         v.to_radians()
@@ -143,7 +130,7 @@ fn parse_grid(
 
 /// Run `mte simulate`.
 pub fn run(args: &Args) -> Result<(), CliError> {
-    let m = load_machine(&args.machine)?;
+    let m = super::machine::load(&args.machine)?;
     let set = ErrorSet::from_file(&args.errors).map_err(lib)?;
     let ev = Evaluator::new(&m, &set).map_err(lib)?;
     let (source, points, grid) = if let Some(p) = &args.program {
