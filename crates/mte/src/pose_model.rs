@@ -276,14 +276,7 @@ impl PoseErrorModel {
                 for (p, q) in points.iter().enumerate() {
                     let mut e0 = vec![0.0; n_slots];
                     let pe = ev.pose_error_first_order(&AxisState::at(q), &mut e0, &mut jac)?;
-                    stacked.rows_mut(6 * p, 6).copy_from_slice(&[
-                        pe.position.x,
-                        pe.position.y,
-                        pe.position.z,
-                        pe.orientation.x,
-                        pe.orientation.y,
-                        pe.orientation.z,
-                    ]);
+                    stacked.rows_mut(6 * p, 6).copy_from(&pe.to_vec6());
                     e0s.push(DVec::from_vec(e0));
                 }
                 Some((e0s, stacked))
@@ -366,13 +359,7 @@ impl Model for PoseErrorModel {
                             e.iter_mut().zip(e0s[p].iter()).for_each(|(a, b)| *a += b);
                         }
                         let pe = self.machine.pose_error(q, &e);
-                        let o = &mut y[6 * p..6 * p + 6];
-                        o[..3].copy_from_slice(&[pe.position.x, pe.position.y, pe.position.z]);
-                        o[3..].copy_from_slice(&[
-                            pe.orientation.x,
-                            pe.orientation.y,
-                            pe.orientation.z,
-                        ]);
+                        y[6 * p..6 * p + 6].copy_from_slice(pe.to_vec6().as_slice());
                     }
                 }
             }

@@ -277,14 +277,7 @@ fn error_set_inputs_follow_the_distributions_and_fixed_entries_are_held() {
         let mut e = vec![0.0; m.n_slots()];
         for (p, q) in pts.iter().enumerate() {
             let pe = ev.pose_error(&AxisState::at(q), &mut e).unwrap();
-            let want = [
-                pe.position.x,
-                pe.position.y,
-                pe.position.z,
-                pe.orientation.x,
-                pe.orientation.y,
-                pe.orientation.z,
-            ];
+            let want = pe.to_vec6();
             for (o, w) in want.iter().enumerate() {
                 // 1e-12 mm / rad: rounding of two summation orders of the same slot errors.
                 assert!(

@@ -408,6 +408,21 @@ fn study(v: &Value, path: &Path) -> Result<Study, CliError> {
 /// One index over outputs: its name, and per output the value and interval of each input.
 type OverOutputs = (String, Vec<Vec<f64>>, Vec<Vec<[f64; 2]>>);
 
+/// The rows (S1, ST) of one output of Sobol' or PCE, and its variance (the aggregate's weight).
+fn s1_st(
+    first: &[f64],
+    first_ci: &[[f64; 2]],
+    total: &[f64],
+    total_ci: &[[f64; 2]],
+    variance: f64,
+) -> (Vec<IndexRow>, f64) {
+    let rows = vec![
+        ("S1".to_string(), first.to_vec(), first_ci.to_vec()),
+        ("ST".to_string(), total.to_vec(), total_ci.to_vec()),
+    ];
+    (rows, variance)
+}
+
 /// Sobol' and PCE: the rows (S1, ST) of each output, weighted by its variance.
 fn sobol_like(json: Value, per_output: Vec<(Vec<IndexRow>, f64)>) -> Indices {
     let shares = ["S1", "ST"]
@@ -475,13 +490,7 @@ fn analyse(args: &Args, v: &Value, st: &Study, path: &Path) -> Result<Indices, C
                 json,
                 r.outputs
                     .iter()
-                    .map(|o| {
-                        let rows = vec![
-                            ("S1".to_string(), o.first.clone(), o.first_ci.clone()),
-                            ("ST".to_string(), o.total.clone(), o.total_ci.clone()),
-                        ];
-                        (rows, o.variance)
-                    })
+                    .map(|o| s1_st(&o.first, &o.first_ci, &o.total, &o.total_ci, o.variance))
                     .collect(),
             )
         }
@@ -507,13 +516,7 @@ fn analyse(args: &Args, v: &Value, st: &Study, path: &Path) -> Result<Indices, C
                 json,
                 r.outputs
                     .iter()
-                    .map(|o| {
-                        let rows = vec![
-                            ("S1".to_string(), o.first.clone(), o.first_ci.clone()),
-                            ("ST".to_string(), o.total.clone(), o.total_ci.clone()),
-                        ];
-                        (rows, o.variance)
-                    })
+                    .map(|o| s1_st(&o.first, &o.first_ci, &o.total, &o.total_ci, o.variance))
                     .collect(),
             )
         }
