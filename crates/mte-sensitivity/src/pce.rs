@@ -317,6 +317,14 @@ impl Design {
         design
     }
 
+    /// Row variants: all rows, and with folds all rows but each fold.
+    fn n_variants(&self) -> usize {
+        match self.segs.len() {
+            1 => 1,
+            folds => folds + 1,
+        }
+    }
+
     fn uni_col(&self, c: usize) -> &[f64] {
         &self.uni[c * self.n..(c + 1) * self.n]
     }
@@ -396,8 +404,7 @@ impl Design {
         parallel: bool,
         block: impl Fn(usize) -> &'a [f64] + Sync,
     ) -> Vec<Vec<Vec<f64>>> {
-        let n_seg = self.segs.len();
-        let n_var = if n_seg > 1 { n_seg + 1 } else { 1 };
+        let (n_seg, n_var) = (self.segs.len(), self.n_variants());
         let one = |vc: usize| -> Vec<f64> {
             let (v, c) = (vc / w, vc % w);
             (0..self.p)
@@ -588,7 +595,7 @@ struct GramCache {
 
 impl GramCache {
     fn new(d: &Design) -> GramCache {
-        let per = d.p * d.segs.len().max(1) * 8 + 1;
+        let per = d.p * d.n_variants() * 8 + 1;
         GramCache {
             cols: Mutex::new(HashMap::new()),
             capacity: (CACHE_BYTES / per).max(64),
