@@ -15,9 +15,10 @@
 //! output. The correlations Ψ_vᵀr of each path (row variant v: all rows, or all but one fold) are
 //! updated after each step from the Gram columns Ψ_vᵀψ_a of the chosen candidate, cached and
 //! shared by all paths and outputs of one design. Ψ itself is never stored: every product Ψᵀ·B
-//! is computed parent by parent from the univariate values (see `Design`), each value one
-//! fixed-order dot product, so results do not depend on timing, batching or thread count. The degree is chosen the same way when
-//! `adaptive_degree` is on (degrees 1 … p, stop when the error grows).
+//! is computed block by block from the univariate values (see `Design`), each value one
+//! fixed-order dot product, so results do not depend on timing, batching or thread count. The
+//! degree is chosen the same way when `adaptive_degree` is on (degrees 1 … p, stop when the
+//! error grows).
 //!
 //! Sobol' indices from the coefficients (Sudret 2008): V = Σ_{α≠0} c_α², Sᵢ = Σ_{α: only i} c_α²/V,
 //! S_Tᵢ = Σ_{α ∋ i} c_α²/V, S_ij = Σ_{α: exactly {i, j}} c_α²/V.
@@ -225,33 +226,43 @@ pub fn univariate(germ: Germ, xi: f64, p: usize, out: &mut [f64]) {
 /// Σ_r b_r π_r φ_d(ξ_rl) = φ_d(ξ_l)ᵀ(b ⊙ π) — so Ψᵀ·B costs n·P·W multiply-adds on data that
 /// stay in cache (the univariate table is n × (1 + p·k)), where a stored Ψ (n·P values, 106 MB
 /// for 41 inputs at degree 3 and 1000 runs) would be streamed from memory on every product.
-/// Rows are grouped fold by fold, so every fold's held-out rows are one contiguous segment.
+/// Parents with the same list of last factors (under total degree: all parents whose last
+/// variable and degree agree) form one block, so each univariate value loaded serves up to four
+/// parents or right-hand sides: a register-blocked matrix product instead of dot products.
+/// The candidates are stored in block order ([`Design::basis`]). Rows are grouped fold by fold,
+/// so every fold's held-out rows are one contiguous segment.
 struct Design {
     n: usize,
     p: usize,
     /// Univariate columns (n values each): 0 is the constant 1, 1 + (d − 1)·k + l is φ_d(ξ_l).
     uni: Vec<f64>,
+    /// The candidates, in the design's order (block by block, parent-major).
+    basis: Vec<MultiIndex>,
     /// Univariate column index of each candidate's factors.
     factors: Vec<Vec<usize>>,
-    /// Candidates grouped by parent.
-    groups: Vec<Group>,
-    /// Group and position in it of each candidate.
-    place: Vec<(usize, usize)>,
+    blocks: Vec<Block>,
     /// Row ranges (start, len) of the folds (one range over all rows without folds).
     segs: Vec<(usize, usize)>,
 }
 
-/// The candidates α = parent × φ_d(ξ_l) of one parent.
-struct Group {
-    /// Values of the parent column (`None`: the constant 1, parent of the constant and the
-    /// univariate terms).
-    parent: Option<Vec<f64>>,
-    /// (candidate, univariate column of its last factor).
-    children: Vec<(usize, usize)>,
+/// Parents (at most [`BLOCK_PARENTS`]) sharing one list of last factors. Their candidates
+/// follow those of the blocks before, parent-major (parent i, child t at i·children.len() + t).
+struct Block {
+    /// Univariate columns of each parent's factors (none: the constant 1, parent of the
+    /// constant and the univariate terms).
+    parents: Vec<Vec<usize>>,
+    /// Univariate column of each child's last factor.
+    children: Vec<usize>,
 }
 
+/// Largest number of parents in one block: two passes of the four-wide register block for one
+/// right-hand side, and few enough z vectors (b ⊙ π) to stay in L1 while the children stream
+/// past; more blocks also share the work out more evenly over threads.
+const BLOCK_PARENTS: usize = 8;
+
 impl Design {
-    /// Ψ of the candidates at germ points `xi` (n × k row-major, already in fold order).
+    /// Ψ of the candidates `basis` at germ points `xi` (n × k row-major, already in fold order).
+    /// The design holds the same candidates in its own order ([`Design::basis`]).
     fn new(
         xi: &[f64],
         n: usize,
@@ -273,48 +284,60 @@ impl Design {
             }
         }
         let column_of = |&(l, d): &(u32, u32)| 1 + (d as usize - 1) * k + l as usize;
-        let factors: Vec<Vec<usize>> = basis
+        // children (last factor's column, candidate) of each parent, parents in basis order
+        let mut parents: Vec<(Option<&[(u32, u32)]>, Vec<(usize, &MultiIndex)>)> = vec![];
+        let mut parent_at: HashMap<Option<&[(u32, u32)]>, usize> = HashMap::new();
+        for a in basis {
+            let (parent, last) = match a.split_last() {
+                None => (None, 0),
+                Some((last, rest)) => ((!rest.is_empty()).then_some(rest), column_of(last)),
+            };
+            let at = *parent_at.entry(parent).or_insert_with(|| {
+                parents.push((parent, vec![]));
+                parents.len() - 1
+            });
+            parents[at].1.push((last, a));
+        }
+        // parents with equal children lists, in order of first appearance, BLOCK_PARENTS at most
+        let mut lists: Vec<(Vec<usize>, Vec<usize>)> = vec![];
+        let mut list_at: HashMap<Vec<usize>, usize> = HashMap::new();
+        for (i, (_, children)) in parents.iter().enumerate() {
+            let key: Vec<usize> = children.iter().map(|c| c.0).collect();
+            let at = *list_at.entry(key.clone()).or_insert_with(|| {
+                lists.push((key, vec![]));
+                lists.len() - 1
+            });
+            lists[at].1.push(i);
+        }
+        let mut ordered = Vec::with_capacity(basis.len());
+        let mut blocks = vec![];
+        for (children, members) in lists {
+            for chunk in members.chunks(BLOCK_PARENTS) {
+                blocks.push(Block {
+                    parents: chunk
+                        .iter()
+                        .map(|&i| parents[i].0.unwrap_or(&[]).iter().map(column_of).collect())
+                        .collect(),
+                    children: children.clone(),
+                });
+                for &i in chunk {
+                    ordered.extend(parents[i].1.iter().map(|c| c.1.clone()));
+                }
+            }
+        }
+        let factors = ordered
             .iter()
             .map(|a| a.iter().map(column_of).collect())
             .collect();
-        let index: HashMap<&[(u32, u32)], usize> = basis
-            .iter()
-            .enumerate()
-            .map(|(j, a)| (a.as_slice(), j))
-            .collect();
-        let mut by_parent: HashMap<Option<usize>, Vec<(usize, usize)>> = HashMap::new();
-        for (j, a) in basis.iter().enumerate() {
-            let (parent, last) = match a.split_last() {
-                None => (None, 0),
-                Some((last, [])) => (None, column_of(last)),
-                Some((last, rest)) => (Some(index[rest]), column_of(last)),
-            };
-            by_parent.entry(parent).or_default().push((j, last));
-        }
-        let mut by_parent: Vec<_> = by_parent.into_iter().collect();
-        by_parent.sort_unstable();
-        let mut design = Design {
+        Design {
             n,
-            p: basis.len(),
+            p: ordered.len(),
             uni,
+            basis: ordered,
             factors,
-            groups: vec![],
-            place: vec![(0, 0); basis.len()],
+            blocks,
             segs,
-        };
-        for (g, (_, children)) in by_parent.iter().enumerate() {
-            for (i, &(j, _)) in children.iter().enumerate() {
-                design.place[j] = (g, i);
-            }
         }
-        design.groups = by_parent
-            .into_iter()
-            .map(|(parent, children)| Group {
-                parent: parent.map(|p| design.col(p)),
-                children,
-            })
-            .collect();
-        design
     }
 
     /// Row variants: all rows, and with folds all rows but each fold.
@@ -325,34 +348,23 @@ impl Design {
         }
     }
 
-    fn uni_col(&self, c: usize) -> &[f64] {
-        &self.uni[c * self.n..(c + 1) * self.n]
-    }
-
     /// Column ψ_j over all rows.
     fn col(&self, j: usize) -> Vec<f64> {
         let mut out = vec![1.0; self.n];
         for &c in &self.factors[j] {
-            for (o, u) in out.iter_mut().zip(self.uni_col(c)) {
+            for (o, u) in out.iter_mut().zip(&self.uni[c * self.n..(c + 1) * self.n]) {
                 *o *= u;
             }
         }
         out
     }
 
-    /// Squared column norms over every row variant: v = 0 all rows, v = f + 1 all rows but fold f.
+    /// Squared column norms over every row variant: v = 0 all rows, v = f + 1 all rows but fold f
+    /// (Σ_r π_r²·φ_r² from the squared univariate columns).
     fn norms2(&self) -> Vec<Vec<f64>> {
-        let per_seg: Vec<Vec<f64>> = (0..self.p)
-            .into_par_iter()
-            .map(|j| {
-                let c = self.col(j);
-                self.segs
-                    .iter()
-                    .map(|&(r0, len)| c[r0..r0 + len].iter().map(|v| v * v).sum())
-                    .collect()
-            })
-            .collect();
-        self.combine_segments(1, true, |j| &per_seg[j])
+        let squares: Vec<f64> = self.uni.iter().map(|u| u * u).collect();
+        let ones = vec![1.0; self.n];
+        self.products(&squares, &[&ones], true)
             .into_iter()
             .map(|mut v| v.pop().expect("one right-hand side"))
             .collect()
@@ -363,142 +375,190 @@ impl Design {
     /// Every value is one fixed-order dot product per fold segment, whatever else is in `b` and
     /// however the work is split over threads.
     fn variant_products(&self, b: &[&[f64]], parallel: bool) -> Vec<Vec<Vec<f64>>> {
-        let w = b.len();
-        let n_seg = self.segs.len();
-        let arch = pulp::Arch::new();
-        // z (W × n, reused by each thread) holds b_c ⊙ parent column
-        let work = |z: &mut Vec<f64>, Group { parent, children }: &Group| {
-            z.clear();
-            for bc in b {
-                match parent {
-                    Some(pc) => z.extend(bc.iter().zip(pc).map(|(x, y)| x * y)),
-                    None => z.extend_from_slice(bc),
-                }
-            }
-            let mut out = vec![0.0; children.len() * w * n_seg];
-            arch.dispatch(GroupProducts {
-                design: self,
-                children,
-                z,
-                out: &mut out,
-            });
-            out
-        };
-        let parts: Vec<Vec<f64>> = if parallel {
-            self.groups.par_iter().map_init(Vec::new, work).collect()
-        } else {
-            let mut z = Vec::new();
-            self.groups.iter().map(|g| work(&mut z, g)).collect()
-        };
-        self.combine_segments(w, parallel, |j| {
-            let (g, i) = self.place[j];
-            &parts[g][i * w * n_seg..(i + 1) * w * n_seg]
-        })
+        self.products(&self.uni, b, parallel)
     }
 
-    /// [variant][rhs][P] from per-segment values (`block(j)[rhs·segments + s]`): all rows is the
-    /// sum over the segments in order, fold f's training rows that sum minus segment f.
-    fn combine_segments<'a>(
-        &self,
-        w: usize,
-        parallel: bool,
-        block: impl Fn(usize) -> &'a [f64] + Sync,
-    ) -> Vec<Vec<Vec<f64>>> {
-        let (n_seg, n_var) = (self.segs.len(), self.n_variants());
-        let one = |vc: usize| -> Vec<f64> {
-            let (v, c) = (vc / w, vc % w);
-            (0..self.p)
-                .map(|j| {
-                    let seg = &block(j)[c * n_seg..(c + 1) * n_seg];
-                    let full: f64 = seg.iter().sum();
-                    if v == 0 { full } else { full - seg[v - 1] }
+    /// [variant][rhs][P]: for candidate π × φ (π = Π of the parent's factors), Σ_r b_r·π_r·φ_r
+    /// over each variant's rows, with π and φ taken from `table` (the univariate columns, or
+    /// their squares). The fold segments are done one after the other, so that one segment of
+    /// the table stays in L2 while every block passes over it; all rows is the sum over the
+    /// segments in order, fold f's training rows that sum minus segment f.
+    fn products(&self, table: &[f64], b: &[&[f64]], parallel: bool) -> Vec<Vec<Vec<f64>>> {
+        let (w, n_seg, n_var) = (b.len(), self.segs.len(), self.n_variants());
+        let size = |block: &Block| block.parents.len() * block.children.len();
+        // per block: [(z·children + child)·segments + s], z = parent-major, then right-hand side
+        let mut seg_values = vec![0.0; self.p * w * n_seg];
+        let mut per_block: Vec<&mut [f64]> = Vec::with_capacity(self.blocks.len());
+        let mut rest = seg_values.as_mut_slice();
+        for block in &self.blocks {
+            let (mine, tail) = std::mem::take(&mut rest).split_at_mut(size(block) * w * n_seg);
+            per_block.push(mine);
+            rest = tail;
+        }
+        let arch = pulp::Arch::new();
+        for (s, &rows) in self.segs.iter().enumerate() {
+            let work = |z: &mut Vec<f64>, (block, out): (&Block, &mut &mut [f64])| {
+                arch.dispatch(BlockProducts {
+                    n: self.n,
+                    table,
+                    b,
+                    block,
+                    rows,
+                    s,
+                    n_seg,
+                    z,
+                    out,
                 })
-                .collect()
-        };
-        let vectors: Vec<Vec<f64>> = if parallel {
-            (0..n_var * w).into_par_iter().map(one).collect()
-        } else {
-            (0..n_var * w).map(one).collect()
-        };
-        let mut vectors = vectors.into_iter();
-        (0..n_var)
-            .map(|_| vectors.by_ref().take(w).collect())
-            .collect()
+            };
+            let jobs: Vec<_> = self.blocks.iter().zip(per_block.iter_mut()).collect();
+            if parallel {
+                jobs.into_par_iter().for_each_init(Vec::new, work);
+            } else {
+                let mut z = Vec::new();
+                jobs.into_iter().for_each(|job| work(&mut z, job));
+            }
+        }
+        let mut out: Vec<Vec<Vec<f64>>> = (0..n_var)
+            .map(|_| (0..w).map(|_| vec![0.0; self.p]).collect())
+            .collect();
+        let mut at = 0;
+        for (block, values) in self.blocks.iter().zip(&per_block) {
+            let nc = block.children.len();
+            for (zi, per_child) in values.chunks_exact(nc * n_seg).enumerate() {
+                let (parent, c) = (zi / w, zi % w);
+                for (t, seg) in per_child.chunks_exact(n_seg).enumerate() {
+                    let j = at + parent * nc + t;
+                    let full: f64 = seg.iter().sum();
+                    out[0][c][j] = full;
+                    if n_var > 1 {
+                        for (f, sf) in seg.iter().enumerate() {
+                            out[f + 1][c][j] = full - sf;
+                        }
+                    }
+                }
+            }
+            at += size(block);
+        }
+        out
     }
 }
 
-/// The segment dot products φ_{last}(ξ)[seg]ᵀ z_c[seg] of one parent's children, out[(child·W +
-/// c)·segments + s], vectorised for the CPU found at run time.
-struct GroupProducts<'a> {
-    design: &'a Design,
-    children: &'a [(usize, usize)],
-    /// W right-hand sides of n values each, one after the other.
-    z: &'a [f64],
+/// One block's dot products over one row segment, out[(z·children + child)·segments + s] for
+/// its vectors z = b_c ⊙ π (parent-major, then right-hand side c), vectorised for the CPU found
+/// at run time.
+struct BlockProducts<'a> {
+    n: usize,
+    table: &'a [f64],
+    b: &'a [&'a [f64]],
+    block: &'a Block,
+    /// The segment's rows (start, len) and its index among `n_seg`.
+    rows: (usize, usize),
+    s: usize,
+    n_seg: usize,
+    /// Scratch for the z vectors.
+    z: &'a mut Vec<f64>,
     out: &'a mut [f64],
 }
 
-impl pulp::WithSimd for GroupProducts<'_> {
+impl pulp::WithSimd for BlockProducts<'_> {
     type Output = ();
 
     #[inline(always)]
     fn with_simd<S: pulp::Simd>(self, simd: S) {
-        let GroupProducts {
-            design,
-            children,
+        let BlockProducts {
+            n,
+            table,
+            b,
+            block,
+            rows: (r0, len),
+            s,
+            n_seg,
             z,
             out,
         } = self;
-        let (n, n_seg) = (design.n, design.segs.len());
-        let w = z.len() / n;
-        let mut put = |i: usize, c: usize, s: usize, v: f64| out[(i * w + c) * n_seg + s] = v;
-        let nc = children.len();
-        let w4 = w - w % 4;
-        for (s, &(r0, len)) in design.segs.iter().enumerate() {
-            let a = |i: usize| &design.uni_col(children[i].1)[r0..r0 + len];
-            let zc = |c: usize| &z[c * n + r0..c * n + r0 + len];
-            // Right-hand sides four at a time: children in pairs, then the odd one.
-            for c in (0..w4).step_by(4) {
-                let zs = [zc(c), zc(c + 1), zc(c + 2), zc(c + 3)];
-                let mut i = 0;
-                while i + 2 <= nc {
-                    let d = dots_2x4(simd, [a(i), a(i + 1)], zs);
-                    for (t, row) in d.iter().enumerate() {
-                        for (cc, v) in row.iter().enumerate() {
-                            put(i + t, c + cc, s, *v);
+        let col = |c: usize| &table[c * n + r0..c * n + r0 + len];
+        let nc = block.children.len();
+        let nz = block.parents.len() * b.len();
+        // z = b ⊙ π, π the product of the parent's factors in order (as in [`Design::col`])
+        z.clear();
+        for factors in &block.parents {
+            for bc in b {
+                let bc = &bc[r0..r0 + len];
+                match factors[..] {
+                    [] => z.extend_from_slice(bc),
+                    [f] => z.extend(bc.iter().zip(col(f)).map(|(x, u)| x * u)),
+                    [f, g] => z.extend(
+                        bc.iter()
+                            .zip(col(f).iter().zip(col(g)))
+                            .map(|(x, (u, v))| x * (u * v)),
+                    ),
+                    [f, ..] => {
+                        let at = z.len();
+                        z.extend_from_slice(col(f));
+                        for &g in &factors[1..] {
+                            z[at..].iter_mut().zip(col(g)).for_each(|(v, u)| *v *= u);
                         }
-                    }
-                    i += 2;
-                }
-                if i < nc {
-                    // aᵀz = zᵀa: the same fused operations with the roles swapped
-                    let d = dots_cx1(simd, zs, a(i));
-                    for (cc, v) in d.iter().enumerate() {
-                        put(i, c + cc, s, *v);
+                        z[at..].iter_mut().zip(bc).for_each(|(v, x)| *v *= x);
                     }
                 }
             }
-            // The other right-hand sides one at a time, children eight, four, one at a time.
-            for c in w4..w {
-                let b = zc(c);
-                let mut i = 0;
-                while i + 8 <= nc {
-                    let d = dots_cx1::<S, 8>(simd, std::array::from_fn(|t| a(i + t)), b);
-                    for (t, v) in d.iter().enumerate() {
-                        put(i + t, c, s, *v);
+        }
+        let z: &[f64] = z;
+        let mut put = |zi: usize, t: usize, v: f64| out[(zi * nc + t) * n_seg + s] = v;
+        let a = |t: usize| col(block.children[t]);
+        let zc = |i: usize| &z[i * len..(i + 1) * len];
+        let (z2, z4, c4) = (nz - nz % 2, nz - nz % 4, nc - nc % 4);
+        // z vectors four at a time against children in pairs (eight accumulators), the odd child
+        // against the four
+        for i in (0..z4).step_by(4) {
+            let zs = [zc(i), zc(i + 1), zc(i + 2), zc(i + 3)];
+            let mut t = 0;
+            while t + 2 <= nc {
+                let d = dots_2x4(simd, [a(t), a(t + 1)], zs);
+                for (dt, row) in d.iter().enumerate() {
+                    for (di, v) in row.iter().enumerate() {
+                        put(i + di, t + dt, *v);
                     }
-                    i += 8;
                 }
-                while i + 4 <= nc {
-                    let d = dots_cx1::<S, 4>(simd, std::array::from_fn(|t| a(i + t)), b);
-                    for (t, v) in d.iter().enumerate() {
-                        put(i + t, c, s, *v);
+                t += 2;
+            }
+            if t < nc {
+                // aᵀz = zᵀa: the same fused operations with the roles swapped
+                for (di, v) in dots_cx1(simd, zs, a(t)).iter().enumerate() {
+                    put(i + di, t, *v);
+                }
+            }
+        }
+        // the rest in pairs against children four at a time, then one by one
+        for i in (z4..z2).step_by(2) {
+            for t in (0..c4).step_by(4) {
+                let d = dots_2x4(
+                    simd,
+                    [zc(i), zc(i + 1)],
+                    [a(t), a(t + 1), a(t + 2), a(t + 3)],
+                );
+                for (di, row) in d.iter().enumerate() {
+                    for (dt, v) in row.iter().enumerate() {
+                        put(i + di, t + dt, *v);
                     }
-                    i += 4;
                 }
-                while i < nc {
-                    put(i, c, s, dots_cx1(simd, [a(i)], b)[0]);
-                    i += 1;
+            }
+            for t in c4..nc {
+                for (di, v) in dots_cx1(simd, [zc(i), zc(i + 1)], a(t)).iter().enumerate() {
+                    put(i + di, t, *v);
                 }
+            }
+        }
+        if z2 < nz {
+            let i = z2;
+            for t in (0..c4).step_by(4) {
+                let d = dots_cx1(simd, [a(t), a(t + 1), a(t + 2), a(t + 3)], zc(i));
+                for (dt, v) in d.iter().enumerate() {
+                    put(i, t + dt, *v);
+                }
+            }
+            for t in c4..nc {
+                put(i, t, dots_cx1(simd, [a(t)], zc(i))[0]);
             }
         }
     }
@@ -576,10 +636,6 @@ fn finish<S: pulp::Simd>(simd: S, acc: S::f64s, a: &[f64], b: &[f64]) -> f64 {
     }
     s
 }
-
-/// Candidates whose Gram columns are computed ahead, per path, whenever a path needs one that is
-/// not cached (their values do not depend on when they are computed, only the time does).
-const PREFETCH: usize = 4;
 
 /// Active-set size from which a path takes Ψ_vᵀq from a direct product ([`Path::direct`]).
 const DIRECT_AFTER: usize = 160;
@@ -822,23 +878,6 @@ impl Path {
         }
     }
 
-    /// The `want` best-scoring candidates not yet tried (Gram columns to compute ahead).
-    fn likely_next(&self, want: usize) -> Vec<usize> {
-        let mut top: Vec<(f64, usize)> = Vec::with_capacity(want + 1);
-        for j in 0..self.c.len() {
-            if self.excluded[j] {
-                continue;
-            }
-            let s = self.score(j);
-            if top.len() < want || s > top[top.len() - 1].0 {
-                let at = top.iter().position(|t| s > t.0).unwrap_or(top.len());
-                top.insert(at, (s, j));
-                top.truncate(want);
-            }
-        }
-        top.into_iter().map(|t| t.1).collect()
-    }
-
     /// Adds the pending candidate, given its Gram columns `g` (one per row variant).
     /// Whether the next step takes Ψ_vᵀq from a direct product rather than from a Gram column
     /// and U = Ψ_vᵀQ: once the active set is long, streaming U (P × p) costs more than the
@@ -1043,6 +1082,7 @@ fn omp_select(
             paths.iter_mut().enumerate().map(select).collect()
         };
         let gram = |p: &Path, pe: &Option<Pending>| pe.is_some() && !p.direct();
+        // the Gram columns no path has asked for before, in one product
         let mut need: Vec<usize> = paths
             .iter()
             .zip(&pending)
@@ -1050,18 +1090,9 @@ fn omp_select(
             .filter_map(|(_, pe)| pe.as_ref().map(|pe| pe.j))
             .filter(|&j| !cache.has(j))
             .collect();
+        need.sort_unstable();
+        need.dedup();
         if !need.is_empty() {
-            for (p, pe) in paths.iter().zip(&pending) {
-                if gram(p, pe) {
-                    need.extend(
-                        p.likely_next(PREFETCH)
-                            .into_iter()
-                            .filter(|&j| !cache.has(j)),
-                    );
-                }
-            }
-            need.sort_unstable();
-            need.dedup();
             cache.fill(d, &need, parallel);
         }
         let work: Vec<(&mut Path, Pending, Option<Arc<Vec<Vec<f64>>>>)> = paths
@@ -1341,7 +1372,6 @@ pub fn fit_pce(
     let parallel_inner = m == 1;
     let mut best: Vec<Option<(usize, Fit)>> = (0..m).map(|_| None).collect();
     let mut still: Vec<bool> = vec![true; m];
-    let mut bases = vec![];
     let mut psis = vec![];
     let mut n_candidates = 0;
     let ys: Vec<Vec<f64>> = (0..m)
@@ -1415,7 +1445,6 @@ pub fn fit_pce(
                 }
             }
         }
-        bases.push(basis);
         psis.push(design);
         if still.iter().all(|s| !s) {
             break;
@@ -1426,7 +1455,7 @@ pub fn fit_pce(
         .enumerate()
         .map(|(o, b)| {
             let (di, fit) = b.expect("at least one degree fitted");
-            let basis = &bases[di];
+            let basis = &psis[di].basis;
             let (mean, variance, first, total, interactions) = indices_from(k, basis, &fit.terms);
             let (mut first_ci, mut total_ci) = (vec![], vec![]);
             if params.n_bootstrap > 0 {
@@ -1586,6 +1615,7 @@ mod tests {
         let basis = multi_indices(k, deg, 0.75);
         let segs = vec![(0, 18), (18, 18), (36, 17)];
         let d = Design::new(&xi, n, k, &germs, deg, &basis, segs.clone());
+        let basis = &d.basis;
         let b: Vec<Vec<f64>> = (0..5)
             .map(|c| {
                 (0..n)
