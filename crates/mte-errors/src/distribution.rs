@@ -179,11 +179,18 @@ impl Distribution {
         }
     }
 
-    /// Standard deviation of the distribution (truncated normal: of the parent normal).
+    /// Standard deviation of the distribution. For the truncated normal this is the truncated
+    /// law's (±1σ truncation: 0.54 of the parent's), not the parent's `sd` field.
     pub fn sd(&self) -> f64 {
         match *self {
-            Distribution::Normal { sd, .. } | Distribution::TruncatedNormal { sd, .. } => sd,
+            Distribution::Normal { sd, .. } => sd,
             Distribution::Uniform { low, high } => (high - low) / 12f64.sqrt(),
+            Distribution::TruncatedNormal {
+                mean,
+                sd,
+                low,
+                high,
+            } => mte_linalg::stats::truncated_normal_moments(mean, sd, low, high).1,
         }
     }
 }
@@ -231,6 +238,7 @@ mod tests {
         let (m, s, lo, hi) = moments(&d, n);
         assert!(m.abs() < 5.0 * 15e-3 * 0.54 / 200.0, "{m}");
         assert!((s / 15e-3 - 0.53956).abs() < 0.01, "{}", s / 15e-3);
+        assert!((d.sd() / 15e-3 - 0.539_560).abs() < 1e-6, "{}", d.sd());
         assert!(lo >= -15e-3 && hi <= 15e-3);
         // One-sided far tail [3σ, 4σ]: every draw inside; mean of N(0,1) on [3,4] = (φ(3) − φ(4))/(Φ(4) − Φ(3)) = 3.26045;
         // sd of that truncated law ≈ 0.23, n = 40000 → standard error 0.0012.
@@ -240,8 +248,9 @@ mod tests {
             low: 3.0,
             high: 4.0,
         };
-        let (m, _, lo, hi) = moments(&d, n);
+        let (m, s, lo, hi) = moments(&d, n);
         assert!(lo >= 3.0 && hi <= 4.0 && (m - 3.26045).abs() < 0.006, "{m}");
+        assert!((d.sd() - s).abs() < 0.005, "{} vs sampled {s}", d.sd());
     }
 
     #[test]

@@ -200,6 +200,29 @@ pub fn normal_cdf(x: f64) -> f64 {
     0.5 * erfc(-x / SQRT_2)
 }
 
+/// Standard normal density φ(x).
+pub fn normal_pdf(x: f64) -> f64 {
+    (-0.5 * x * x).exp() / (2.0 * PI).sqrt()
+}
+
+/// Mean and standard deviation of N(mean, sd²) truncated to [lo, hi] (either end may be
+/// infinite): with α, β the standardised ends and Z = Φ(β) − Φ(α), the mean is
+/// mean + sd·(φ(α) − φ(β))/Z and the variance sd²·(1 + (αφ(α) − βφ(β))/Z − ((φ(α) − φ(β))/Z)²).
+/// The standard deviation is the truncated law's, not the parent's `sd`.
+pub fn truncated_normal_moments(mean: f64, sd: f64, lo: f64, hi: f64) -> (f64, f64) {
+    let (a, b) = ((lo - mean) / sd, (hi - mean) / sd);
+    let z = normal_cdf(b) - normal_cdf(a);
+    let pdf = |t: f64| if t.is_finite() { normal_pdf(t) } else { 0.0 };
+    let (pa, pb) = (pdf(a), pdf(b));
+    let ta = if a.is_finite() { a * pa } else { 0.0 };
+    let tb = if b.is_finite() { b * pb } else { 0.0 };
+    let r = (pa - pb) / z;
+    (
+        mean + sd * (pa - pb) / z,
+        (sd * sd * (1.0 + (ta - tb) / z - r * r)).sqrt(),
+    )
+}
+
 /// Standard normal quantile Φ⁻¹(p) for 0 < p < 1 (Acklam's rational approximation refined by
 /// one Halley step on [`normal_cdf`]); ±∞ at p = 0 or 1, NaN outside [0, 1].
 pub fn normal_quantile(p: f64) -> f64 {

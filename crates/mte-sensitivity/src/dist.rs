@@ -3,6 +3,7 @@
 
 use crate::error::{Error, Result};
 use crate::special::{norm_cdf, norm_ppf, norm_ppf_fast};
+use mte_linalg::stats::truncated_normal_moments;
 use serde::{Deserialize, Serialize};
 use serde_json::Value;
 
@@ -184,9 +185,7 @@ impl Distribution {
             Distribution::Normal { mean, .. } => mean,
             Distribution::Uniform { lo, hi } => 0.5 * (lo + hi),
             Distribution::TruncatedNormal { mean, sd, lo, hi } => {
-                let (a, b) = ((lo - mean) / sd, (hi - mean) / sd);
-                let z = norm_cdf(b) - norm_cdf(a);
-                mean + sd * (pdf_or0(a) - pdf_or0(b)) / z
+                truncated_normal_moments(mean, sd, lo, hi).0
             }
         }
     }
@@ -197,13 +196,7 @@ impl Distribution {
             Distribution::Normal { sd, .. } => sd,
             Distribution::Uniform { lo, hi } => (hi - lo) / 12f64.sqrt(),
             Distribution::TruncatedNormal { mean, sd, lo, hi } => {
-                let (a, b) = ((lo - mean) / sd, (hi - mean) / sd);
-                let z = norm_cdf(b) - norm_cdf(a);
-                let (pa, pb) = (pdf_or0(a), pdf_or0(b));
-                let ta = if a.is_finite() { a * pa } else { 0.0 };
-                let tb = if b.is_finite() { b * pb } else { 0.0 };
-                let r = (pa - pb) / z;
-                (sd * sd * (1.0 + (ta - tb) / z - r * r)).sqrt()
+                truncated_normal_moments(mean, sd, lo, hi).1
             }
         }
     }
@@ -260,14 +253,6 @@ impl Distribution {
                 norm_ppf(self.cdf(x).clamp(1e-300, 1.0 - 1e-16))
             }
         }
-    }
-}
-
-fn pdf_or0(z: f64) -> f64 {
-    if z.is_finite() {
-        crate::special::norm_pdf(z)
-    } else {
-        0.0
     }
 }
 

@@ -1,8 +1,8 @@
 //! Special functions: error function, standard normal density, CDF and quantile.
 //!
-//! One shared copy: `erf`, `erfc`, `norm_cdf`, `norm_ppf` and `norm_ppf_fast` are
+//! One shared copy: `erf`, `erfc`, `norm_pdf`, `norm_cdf`, `norm_ppf` and `norm_ppf_fast` are
 //! [`mte_linalg::stats`]'s functions under the names this crate has always used
-//! (`normal_cdf`, `normal_quantile`, `normal_quantile_fast` there).
+//! (`normal_pdf`, `normal_cdf`, `normal_quantile`, `normal_quantile_fast` there).
 //!
 //! ```
 //! use mte_sensitivity::special::{erf, norm_cdf, norm_ppf};
@@ -11,17 +11,10 @@
 //! assert!((norm_ppf(0.975) - 1.959_963_984_540_054).abs() < 1e-14);
 //! ```
 
-use std::f64::consts::PI;
-
 pub use mte_linalg::stats::{
-    erf, erfc, normal_cdf as norm_cdf, normal_quantile as norm_ppf,
+    erf, erfc, normal_cdf as norm_cdf, normal_pdf as norm_pdf, normal_quantile as norm_ppf,
     normal_quantile_fast as norm_ppf_fast,
 };
-
-/// Standard normal density φ(z).
-pub fn norm_pdf(z: f64) -> f64 {
-    (-0.5 * z * z).exp() / (2.0 * PI).sqrt()
-}
 
 #[cfg(test)]
 mod tests {
