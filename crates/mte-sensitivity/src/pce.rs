@@ -637,6 +637,10 @@ fn finish<S: pulp::Simd>(simd: S, acc: S::f64s, a: &[f64], b: &[f64]) -> f64 {
     s
 }
 
+/// Outputs fitted together: their Ψ_vᵀy are one product, and their correlation vectors
+/// (folds + 1 per output, P values each) are held at the same time.
+const OUTPUTS_PER_PRODUCT: usize = 32;
+
 /// Active-set size from which a path takes Ψ_vᵀq from a direct product ([`Path::direct`]).
 const DIRECT_AFTER: usize = 160;
 
@@ -1407,20 +1411,22 @@ pub fn fit_pce(
         let design = Design::new(&xi, n, k, &germs, deg, &basis, segs.clone());
         // Squared column norms of every row variant (all rows; all but fold f), for all outputs.
         let col_norm2 = design.norms2();
-        // Ψ_vᵀy of every output and row variant, in one product.
-        let y_refs: Vec<&[f64]> = ys.iter().map(Vec::as_slice).collect();
-        let c0 = design.variant_products(&y_refs, true);
-        let mut c0_by_output: Vec<Vec<Vec<f64>>> = (0..m).map(|_| vec![]).collect();
-        for variant in c0 {
-            for (o, c) in variant.into_iter().enumerate() {
-                c0_by_output[o].push(c);
-            }
-        }
         let cache = GramCache::new(&design);
-        let fits: Vec<Option<Fit>> = c0_by_output
-            .into_par_iter()
-            .enumerate()
-            .map(|(o, c0)| {
+        // Outputs OUTPUTS_PER_PRODUCT at a time: Ψ_vᵀy of every row variant in one product, then
+        // their paths in parallel (memory stays bounded however many outputs there are; no value
+        // depends on the grouping).
+        let mut fits: Vec<Option<Fit>> = Vec::with_capacity(m);
+        for chunk in ys.chunks(OUTPUTS_PER_PRODUCT) {
+            let o0 = fits.len();
+            let y_refs: Vec<&[f64]> = chunk.iter().map(Vec::as_slice).collect();
+            let mut c0: Vec<Vec<Vec<f64>>> = chunk.iter().map(|_| vec![]).collect();
+            for variant in design.variant_products(&y_refs, true) {
+                for (out, c) in c0.iter_mut().zip(variant) {
+                    out.push(c);
+                }
+            }
+            fits.par_extend(c0.into_par_iter().enumerate().map(|(i, c0)| {
+                let o = o0 + i;
                 still[o].then(|| {
                     omp_select(
                         &design,
@@ -1433,8 +1439,8 @@ pub fn fit_pce(
                         parallel_inner,
                     )
                 })
-            })
-            .collect();
+            }));
+        }
         for (o, f) in fits.into_iter().enumerate() {
             if let Some(f) = f {
                 let better = best[o].as_ref().is_none_or(|(_, b)| f.crit < b.crit);
