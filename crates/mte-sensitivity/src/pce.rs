@@ -487,6 +487,8 @@ impl pulp::WithSimd for BlockProducts<'_> {
                 match factors[..] {
                     [] => z.extend_from_slice(bc),
                     [f] => z.extend(bc.iter().zip(col(f)).map(|(x, u)| x * u)),
+                    // two factors (every degree-2 parent) in one pass; the same values as the
+                    // general arm below, x·(u·v) = (u·v)·x
                     [f, g] => z.extend(
                         bc.iter()
                             .zip(col(f).iter().zip(col(g)))
@@ -745,12 +747,14 @@ struct Path {
 
 impl Path {
     /// Path of row variant `variant` (0: all rows; f + 1: all but fold f); `c0` = Ψ_vᵀy,
-    /// `norm2` the squared column norms over the variant's rows.
+    /// `norm2` the squared column norms over the variant's rows; steps are [`Path::direct`] from
+    /// `direct_after` active terms.
     fn new(
         d: &Design,
         y: &[f64],
         variant: usize,
         kmax: usize,
+        direct_after: usize,
         norm2: Vec<f64>,
         c0: Vec<f64>,
     ) -> Self {
@@ -798,7 +802,7 @@ impl Path {
             best_p: 0,
             state: Stop::Running,
             kmax,
-            direct_after: DIRECT_AFTER,
+            direct_after,
         }
     }
 
@@ -882,7 +886,6 @@ impl Path {
         }
     }
 
-    /// Adds the pending candidate, given its Gram columns `g` (one per row variant).
     /// Whether the next step takes Ψ_vᵀq from a direct product rather than from a Gram column
     /// and U = Ψ_vᵀQ: once the active set is long, streaming U (P × p) costs more than the
     /// product (n·P multiply-adds on data in cache), and U is no longer kept.
@@ -1066,9 +1069,7 @@ fn omp_select(
         .enumerate()
         .map(|(v, c)| {
             let nt = if v == 0 { n } else { n - d.segs[v - 1].1 };
-            let mut path = Path::new(d, y, v, kmax(nt), col_norm2[v].clone(), c);
-            path.direct_after = direct_after;
-            path
+            Path::new(d, y, v, kmax(nt), direct_after, col_norm2[v].clone(), c)
         })
         .collect();
     loop {
@@ -1373,7 +1374,6 @@ pub fn fit_pce(
     } else {
         vec![params.degree]
     };
-    let parallel_inner = m == 1;
     let mut best: Vec<Option<(usize, Fit)>> = (0..m).map(|_| None).collect();
     let mut still: Vec<bool> = vec![true; m];
     let mut psis = vec![];
@@ -1418,6 +1418,8 @@ pub fn fit_pce(
         let mut fits: Vec<Option<Fit>> = Vec::with_capacity(m);
         for chunk in ys.chunks(OUTPUTS_PER_PRODUCT) {
             let o0 = fits.len();
+            // one output alone: its paths and products use the threads instead
+            let parallel_inner = chunk.len() == 1;
             let y_refs: Vec<&[f64]> = chunk.iter().map(Vec::as_slice).collect();
             let mut c0: Vec<Vec<Vec<f64>>> = chunk.iter().map(|_| vec![]).collect();
             for variant in design.variant_products(&y_refs, true) {
@@ -1705,6 +1707,7 @@ mod tests {
             };
             let (gram, direct) = (fit(usize::MAX), fit(0));
             assert_eq!(gram.steps, direct.steps);
+            assert_eq!(gram.terms.len(), direct.terms.len());
             assert!(gram.terms.len() > 3);
             for (a, b) in gram.terms.iter().zip(&direct.terms) {
                 assert_eq!(a.0, b.0);
