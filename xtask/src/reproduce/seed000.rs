@@ -414,6 +414,10 @@ pub fn run() -> Result<Study, ReproduceError> {
 /// `… + q6 + q_t + r_t`, taken as a tool point 4500 mm from the spindle frame along the tool axis.
 const RT_MM: f64 = 4500.0;
 
+/// Our tool: the bundled machine's tool body sits 150 mm from the spindle frame (checked by
+/// `rt_lever_moves_the_tool_point_and_lengthens_the_x_levers`).
+const TOOL_MM: f64 = 150.0;
+
 /// The seed 000 machine with Table 3's rt = 4500 read as a real lever: the tool body's offset is
 /// (0, 0, −rt) instead of our 150 mm tool, and the workpiece sits rt − 150 mm lower on the X
 /// table (qw_z = 250 − 4350 mm) so that the tool point reaches the S piece with Z, Y, X inside
@@ -754,7 +758,7 @@ pub fn generate() -> Result<String, ReproduceError> {
          A side study; the result above is unchanged. Table 3 lists rt = 4500 mm beside the q \
          vectors. In eq 2 the tool chain ends `… + q6 + q6e + s6 + q_t + r_t`, r_t being the NC \
          command's projection on the tool frame; our model reads it as a command projection and \
-         uses a 150 mm tool. Read instead as a real vector of length rt along the tool axis (the \
+         uses a {TOOL_MM:.0} mm tool. Read instead as a real vector of length rt along the tool axis (the \
          only direction a scalar can give in the tool frame), the tool point lies {RT_MM:.0} mm \
          from the spindle frame. For that point still to cut the S piece with X, Y, Z inside \
          their strokes, the part must sit {:.0} mm lower on the X table (qw_z = 250 − {:.0} mm); \
@@ -762,15 +766,15 @@ pub fn generate() -> Result<String, ReproduceError> {
          at once: tool-branch angular errors (Y, Z, C, A, spindle, their squareness) gain {:.0} mm \
          along the tool axis, and the X carriage's pitch and roll gain {:.0} mm in −z to the \
          part. Tolerances, test piece and method are as above.\n",
-        RT_MM - 150.0,
-        RT_MM - 150.0,
-        RT_MM - 150.0,
-        RT_MM - 150.0,
+        RT_MM - TOOL_MM,
+        RT_MM - TOOL_MM,
+        RT_MM - TOOL_MM,
+        RT_MM - TOOL_MM,
     );
     let _ = write!(w, "{}", axis_ranges_line(&rt.poses));
     let _ = writeln!(
         w,
-        "\n\n| E, method | leading six with rt = 4500 | their sum | the paper's six: ranks, sum (150 mm tool → rt) |\n|---|---|---|---|"
+        "\n\n| E, method | leading six with rt = 4500 | their sum | the paper's six: ranks, sum ({TOOL_MM:.0} mm tool → rt) |\n|---|---|---|---|"
     );
     for (label, ix, r, base, base_r) in [
         (
@@ -839,10 +843,10 @@ pub fn generate() -> Result<String, ReproduceError> {
         .any(|i| pos(&rt_m, i) <= 6);
     let _ = writeln!(
         w,
-        "**{}{}** Under the motion-increment method the paper's six carry {:.3} (150 mm tool: \
+        "**{}{}** Under the motion-increment method the paper's six carry {:.3} ({TOOL_MM:.0} mm tool: \
          {:.3}; paper: {PAPER_SIX_SHARE:.2}). The 4.35 m lever multiplies the X pitch's E by \
          {:.1}, but it lengthens every tool-branch angular lever as well, and the long tool swung \
-         by C makes Y travel {:.0} mm over the test (150 mm tool: {:.0} mm), so Y-guideway and \
+         by C makes Y travel {:.0} mm over the test ({TOOL_MM:.0} mm tool: {:.0} mm), so Y-guideway and \
          head errors gain more than X's; X still travels only {:.0} mm, and eq 13 scales every X \
          error's increment with that travel. Reading rt as a lever is therefore not what \
          separates our ranking from the paper's.\n",
@@ -1020,10 +1024,11 @@ mod tests {
         let (m, c, l, q) = setup();
         let rt = rt_lever_machine().unwrap();
         let body = |m: &Machine, name: &str| m.bodies()[m.body_index(name).unwrap()].offset_mm;
+        assert_eq!(body(&m, "tool"), Vec3::new(0.0, 0.0, -TOOL_MM));
         assert_eq!(body(&rt, "tool"), Vec3::new(0.0, 0.0, -RT_MM));
         assert_eq!(
             body(&rt, "workpiece"),
-            body(&m, "workpiece") - Vec3::z() * (RT_MM - 150.0)
+            body(&m, "workpiece") - Vec3::z() * (RT_MM - TOOL_MM)
         );
         let q_rt = poses(&rt, &l).unwrap();
         for (g, qi) in l.iter().zip(&q_rt) {
@@ -1038,7 +1043,7 @@ mod tests {
             for p in 0..LINES {
                 for k in 0..3 {
                     let d = (tip_rt[k][n][p] - tip[k][n][p]).abs();
-                    let want = if k == along { RT_MM - 150.0 } else { 0.0 };
+                    let want = if k == along { RT_MM - TOOL_MM } else { 0.0 };
                     // mm per rad; the levers are exact sums of Table 3 offsets.
                     assert!(
                         (d - want).abs() < 1e-6,
