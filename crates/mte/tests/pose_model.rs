@@ -488,6 +488,13 @@ fn seed003_tolerance_fixture_is_the_study() {
     assert_eq!(problem.dim(), 41);
     let arcsec = std::f64::consts::PI / 648_000.0;
     for (i, (name, input)) in problem.names().iter().zip(problem.inputs()).enumerate() {
+        let param = &study.parameters()[i];
+        assert!(
+            *name == param.name || param.aliases.contains(name),
+            "input {i}: {name} is not the study's {} ({:?})",
+            param.name,
+            param.aliases
+        );
         let sd = input.dist.sd();
         let want = if study.parameters()[i].quantity == mte_errors::units::Kind::Angle {
             10.0 / 3.0 * arcsec
