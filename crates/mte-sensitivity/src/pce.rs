@@ -741,6 +741,9 @@ struct Path {
     best_p: usize,
     state: Stop,
     kmax: usize,
+    /// Whether the path ends by its own criterion (hold-out error of a fold, corrected LOO
+    /// without folds); the full path under K-fold is sized by the folds ([`omp_select`]).
+    own_stop: bool,
     /// Active-set size from which steps are [`Path::direct`].
     direct_after: usize,
 }
@@ -802,6 +805,7 @@ impl Path {
             best_p: 0,
             state: Stop::Running,
             kmax,
+            own_stop: variant > 0 || d.segs.len() == 1,
             direct_after,
         }
     }
@@ -901,7 +905,6 @@ impl Path {
         y: &[f64],
         pend: Pending,
         g: Option<&[Vec<f64>]>,
-        use_hold: bool,
         parallel: bool,
     ) {
         let n = y.len();
@@ -989,7 +992,7 @@ impl Path {
             f64::INFINITY
         };
         self.cloo.push(loo * corr);
-        let crit = if use_hold {
+        let crit = if self.variant > 0 {
             let b = self.coef(p);
             let mut e = 0.0;
             for (t, &i) in self.hold.iter().enumerate() {
@@ -1008,7 +1011,8 @@ impl Path {
         }
         let rr: f64 = self.resid.iter().map(|a| a * a).sum();
         let patience = 10.max(self.best_p / 5);
-        if p >= self.kmax || rr <= 1e-26 * self.y_norm2 || p - self.best_p >= patience {
+        let own_end = self.own_stop && p - self.best_p >= patience;
+        if p >= self.kmax || rr <= 1e-26 * self.y_norm2 || own_end {
             self.state = Stop::Done;
         }
     }
@@ -1073,10 +1077,12 @@ fn omp_select(
         })
         .collect();
     loop {
-        // The full path (0) keeps going while any fold runs (its size is decided by the folds).
-        let folds_running = paths[1..].iter().any(|p| p.state == Stop::Running);
-        let live =
-            |i: usize, p: &Path| p.state == Stop::Running && (i > 0 || folds == 0 || folds_running);
+        // The full path (0) only needs to reach the size the folds choose: it follows their
+        // current choice, one step behind, and finishes the remaining steps (if any) alone.
+        let full_target = cv_choice(&paths[1..]).map_or(1, |c| c.0.max(1));
+        let live = |i: usize, p: &Path| {
+            p.state == Stop::Running && (i > 0 || folds == 0 || p.active.len() < full_target)
+        };
         if !paths.iter().enumerate().any(|(i, p)| live(i, p)) {
             break;
         }
@@ -1116,8 +1122,7 @@ fn omp_select(
             })
             .collect();
         let commit = |(p, pe, g): (&mut Path, Pending, Option<Arc<Vec<Vec<f64>>>>)| {
-            let hold = p.variant > 0;
-            p.commit(d, y, pe, g.as_deref().map(Vec::as_slice), hold, parallel)
+            p.commit(d, y, pe, g.as_deref().map(Vec::as_slice), parallel)
         };
         if parallel {
             work.into_par_iter().for_each(commit);
@@ -1128,30 +1133,8 @@ fn omp_select(
     let full = &paths[0];
     let var_y = full.var_y.max(f64::MIN_POSITIVE);
     let (p_star, cv_error) = if folds > 0 {
-        let len = paths[1..]
-            .iter()
-            .map(|p| p.hold_err.len())
-            .max()
-            .unwrap_or(0)
-            .min(full.active.len());
-        let mut best = (1, f64::INFINITY);
-        for p in 1..=len {
-            let mut s = 0.0;
-            let mut w = 0.0;
-            for fp in &paths[1..] {
-                if fp.hold_err.is_empty() {
-                    continue;
-                }
-                let e = fp.hold_err[(p - 1).min(fp.hold_err.len() - 1)];
-                s += e * fp.hold.len() as f64;
-                w += fp.hold.len() as f64;
-            }
-            let e = s / w;
-            if e < best.1 {
-                best = (p, e);
-            }
-        }
-        (best.0, best.1 / var_y)
+        let (p, e) = cv_choice(&paths[1..]).unwrap_or((1, f64::INFINITY));
+        (p, e / var_y)
     } else {
         let mut best = (1, f64::INFINITY);
         for (i, &e) in full.cloo.iter().enumerate() {
@@ -1189,6 +1172,28 @@ fn omp_select(
         steps: full.active.len(),
         crit: if folds > 0 { cv_error } else { loo },
     }
+}
+
+/// The K-fold choice from the fold paths so far: the size with the least hold-out mean squared
+/// error over all folds (a fold that ended keeps its last error), and that error; None before
+/// any fold has taken a step.
+fn cv_choice(folds: &[Path]) -> Option<(usize, f64)> {
+    let len = folds.iter().map(|p| p.hold_err.len()).max()?;
+    let mut best = None;
+    for p in 1..=len {
+        let mut s = 0.0;
+        let mut w = 0.0;
+        for fp in folds.iter().filter(|fp| !fp.hold_err.is_empty()) {
+            let e = fp.hold_err[(p - 1).min(fp.hold_err.len() - 1)];
+            s += e * fp.hold.len() as f64;
+            w += fp.hold.len() as f64;
+        }
+        let e = s / w;
+        if best.is_none_or(|(_, b)| e < b) {
+            best = Some((p, e));
+        }
+    }
+    best
 }
 
 /// Least squares on a fixed support through the normal equations (Cholesky), for the bootstrap.
