@@ -384,20 +384,28 @@ impl Design {
     /// the table stays in L2 while every block passes over it; all rows is the sum over the
     /// segments in order, fold f's training rows that sum minus segment f.
     fn products(&self, table: &[f64], b: &[&[f64]], parallel: bool) -> Vec<Vec<Vec<f64>>> {
-        let (w, n_seg, n_var) = (b.len(), self.segs.len(), self.n_variants());
-        let size = |block: &Block| block.parents.len() * block.children.len();
-        // per block: [(z·children + child)·segments + s], z = parent-major, then right-hand side
-        let mut seg_values = vec![0.0; self.p * w * n_seg];
-        let mut per_block: Vec<&mut [f64]> = Vec::with_capacity(self.blocks.len());
-        let mut rest = seg_values.as_mut_slice();
-        for block in &self.blocks {
-            let (mine, tail) = std::mem::take(&mut rest).split_at_mut(size(block) * w * n_seg);
-            per_block.push(mine);
-            rest = tail;
+        let (w, n_var) = (b.len(), self.n_variants());
+        let mut out: Vec<Vec<Vec<f64>>> = (0..n_var)
+            .map(|_| (0..w).map(|_| vec![0.0; self.p]).collect())
+            .collect();
+        // each block's stretch of every out[v][c], in the order v·w + c
+        let mut per_block: Vec<Vec<&mut [f64]>> = self
+            .blocks
+            .iter()
+            .map(|_| Vec::with_capacity(n_var * w))
+            .collect();
+        for values in out.iter_mut().flatten() {
+            let mut rest = values.as_mut_slice();
+            for (block, mine) in self.blocks.iter().zip(per_block.iter_mut()) {
+                let size = block.parents.len() * block.children.len();
+                let (head, tail) = std::mem::take(&mut rest).split_at_mut(size);
+                mine.push(head);
+                rest = tail;
+            }
         }
         let arch = pulp::Arch::new();
         for (s, &rows) in self.segs.iter().enumerate() {
-            let work = |z: &mut Vec<f64>, (block, out): (&Block, &mut &mut [f64])| {
+            let work = |z: &mut Vec<f64>, (block, out): (&Block, &mut Vec<&mut [f64]>)| {
                 arch.dispatch(BlockProducts {
                     n: self.n,
                     table,
@@ -405,7 +413,7 @@ impl Design {
                     block,
                     rows,
                     s,
-                    n_seg,
+                    folds: n_var > 1,
                     z,
                     out,
                 })
@@ -418,35 +426,23 @@ impl Design {
                 jobs.into_iter().for_each(|job| work(&mut z, job));
             }
         }
-        let mut out: Vec<Vec<Vec<f64>>> = (0..n_var)
-            .map(|_| (0..w).map(|_| vec![0.0; self.p]).collect())
-            .collect();
-        let mut at = 0;
-        for (block, values) in self.blocks.iter().zip(&per_block) {
-            let nc = block.children.len();
-            for (zi, per_child) in values.chunks_exact(nc * n_seg).enumerate() {
-                let (parent, c) = (zi / w, zi % w);
-                for (t, seg) in per_child.chunks_exact(n_seg).enumerate() {
-                    let j = at + parent * nc + t;
-                    let full: f64 = seg.iter().sum();
-                    out[0][c][j] = full;
-                    if n_var > 1 {
-                        for (f, sf) in seg.iter().enumerate() {
-                            out[f + 1][c][j] = full - sf;
-                        }
-                    }
+        drop(per_block);
+        // out[f + 1] holds segment f: fold f's training rows are all rows minus it
+        if let Some((full, folds)) = out.split_first_mut() {
+            for fold in folds {
+                for (seg, all) in fold.iter_mut().zip(full.iter()) {
+                    seg.iter_mut().zip(all).for_each(|(v, a)| *v = a - *v);
                 }
             }
-            at += size(block);
         }
         out
     }
 }
 
-/// One block's dot products over one row segment, out[(z·children + child)·segments + s] for
-/// its vectors z = b_c ⊙ π (parent-major, then right-hand side c), vectorised for the CPU found
-/// at run time.
-struct BlockProducts<'a> {
+/// One block's dot products over one row segment for its vectors z = b_c ⊙ π (parent-major, then
+/// right-hand side c), vectorised for the CPU found at run time. Segment by segment, they are
+/// summed in order into out[c] (all rows) and, with folds, segment s is kept in out[(s + 1)·w + c].
+struct BlockProducts<'a, 'b> {
     n: usize,
     table: &'a [f64],
     b: &'a [&'a [f64]],
@@ -454,13 +450,15 @@ struct BlockProducts<'a> {
     /// The segment's rows (start, len) and its index among `n_seg`.
     rows: (usize, usize),
     s: usize,
-    n_seg: usize,
+    /// Whether the rows are in folds (the segments are kept).
+    folds: bool,
     /// Scratch for the z vectors.
     z: &'a mut Vec<f64>,
-    out: &'a mut [f64],
+    /// The block's stretch of out[v][c], at v·w + c.
+    out: &'a mut [&'b mut [f64]],
 }
 
-impl pulp::WithSimd for BlockProducts<'_> {
+impl pulp::WithSimd for BlockProducts<'_, '_> {
     type Output = ();
 
     #[inline(always)]
@@ -472,7 +470,7 @@ impl pulp::WithSimd for BlockProducts<'_> {
             block,
             rows: (r0, len),
             s,
-            n_seg,
+            folds,
             z,
             out,
         } = self;
@@ -506,7 +504,18 @@ impl pulp::WithSimd for BlockProducts<'_> {
             }
         }
         let z: &[f64] = z;
-        let mut put = |zi: usize, t: usize, v: f64| out[(zi * nc + t) * n_seg + s] = v;
+        let w = b.len();
+        let mut put = |zi: usize, t: usize, v: f64| {
+            let (c, j) = (zi % w, zi / w * nc + t);
+            if s == 0 {
+                out[c][j] = v;
+            } else {
+                out[c][j] += v;
+            }
+            if folds {
+                out[(s + 1) * w + c][j] = v;
+            }
+        };
         let a = |t: usize| col(block.children[t]);
         let zc = |i: usize| &z[i * len..(i + 1) * len];
         let (z2, z4, c4) = (nz - nz % 2, nz - nz % 4, nc - nc % 4);
@@ -646,6 +655,9 @@ const OUTPUTS_PER_PRODUCT: usize = 32;
 /// Active-set size from which a path takes Ψ_vᵀq from a direct product ([`Path::direct`]).
 const DIRECT_AFTER: usize = 160;
 
+/// Columns per block of a path's U = Ψ_vᵀQ ([`Path`]).
+const U_BLOCK: usize = 16;
+
 /// Largest number of cached Gram columns (each holds folds + 1 vectors of P values).
 const CACHE_BYTES: usize = 256 << 20;
 
@@ -731,7 +743,11 @@ struct Path {
     resid: Vec<f64>,
     h: Vec<f64>,
     c: Vec<f64>,
-    u: Vec<f64>,
+    /// U = Ψ_vᵀQ in blocks of [`U_BLOCK`] columns (P × cols, column-major), so that growing it
+    /// never copies what is there.
+    u: Vec<Vec<f64>>,
+    /// Ψ_vᵀq of the newest column (scratch of P values).
+    un: Vec<f64>,
     n_train: usize,
     var_y: f64,
     y_norm2: f64,
@@ -796,6 +812,7 @@ impl Path {
             h: vec![0.0; n],
             c: c0,
             u: vec![],
+            un: vec![],
             n_train,
             var_y,
             y_norm2,
@@ -916,31 +933,32 @@ impl Path {
             rkk,
         } = pend;
         let p = self.active.len();
-        let un = match g {
+        let np = self.c.len();
+        match g {
             // Ψ_vᵀq_new = (Ψ_vᵀψ_j − U·r_c)/r_kk
             Some(g) => {
-                let np = self.c.len();
-                let mut un = g[self.variant].clone();
-                if p > 0 {
-                    let um = faer::ColMut::from_slice_mut(&mut un);
+                self.un.clear();
+                self.un.extend_from_slice(&g[self.variant]);
+                for (block, rc) in self.u.iter().zip(rc[..p].chunks(U_BLOCK)) {
                     faer::linalg::matmul::matmul(
-                        um.as_mat_mut(),
+                        faer::ColMut::from_slice_mut(&mut self.un).as_mat_mut(),
                         Accum::Add,
-                        MatRef::from_column_major_slice(&self.u, np, p),
-                        faer::ColRef::from_slice(&rc[..p]).as_mat(),
+                        MatRef::from_column_major_slice(block, np, rc.len()),
+                        faer::ColRef::from_slice(rc).as_mat(),
                         -1.0,
                         Par::Seq,
                     );
                 }
-                un.iter_mut().for_each(|a| *a /= rkk);
-                un
+                self.un.iter_mut().for_each(|a| *a /= rkk);
             }
             // q_new is zero on the held-out rows, so Ψᵀq_new over all rows is Ψ_vᵀq_new
-            None => d
-                .variant_products(&[&v], parallel)
-                .swap_remove(0)
-                .swap_remove(0),
-        };
+            None => {
+                self.un = d
+                    .variant_products(&[&v], parallel)
+                    .swap_remove(0)
+                    .swap_remove(0)
+            }
+        }
         // R⁻¹ new column: −R⁻¹[:p,:p] r[:p] / rkk, diagonal 1/rkk
         let mut ic = vec![0.0; p + 1];
         for i in 0..p {
@@ -964,11 +982,17 @@ impl Path {
             *r -= dd * qi;
             *h += qi * qi;
         }
-        for (c, ui) in self.c.iter_mut().zip(&un) {
+        for (c, ui) in self.c.iter_mut().zip(&self.un) {
             *c -= dd * ui;
         }
         if !self.direct() {
-            self.u.extend_from_slice(&un);
+            if self.u.last().is_none_or(|b| b.len() == U_BLOCK * np) {
+                self.u.push(Vec::with_capacity(U_BLOCK * np));
+            }
+            self.u
+                .last_mut()
+                .expect("pushed")
+                .extend_from_slice(&self.un);
         }
         self.q.extend_from_slice(&v);
         // store R⁻¹ by columns: rinv[col][row]
