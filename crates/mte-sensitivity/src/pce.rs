@@ -380,9 +380,10 @@ impl Design {
 
     /// [variant][rhs][P]: for candidate π × φ (π = Π of the parent's factors), Σ_r b_r·π_r·φ_r
     /// over each variant's rows, with π and φ taken from `table` (the univariate columns, or
-    /// their squares). The fold segments are done one after the other, so that one segment of
-    /// the table stays in L2 while every block passes over it; all rows is the sum over the
-    /// segments in order, fold f's training rows that sum minus segment f.
+    /// their squares). Each task takes a run of blocks through the fold segments one after the
+    /// other, so that one segment of the table stays in L2 while the run's blocks pass over it;
+    /// all rows is the sum over the segments in order, fold f's training rows that sum minus
+    /// segment f.
     fn products(&self, table: &[f64], b: &[&[f64]], parallel: bool) -> Vec<Vec<Vec<f64>>> {
         let (w, n_var) = (b.len(), self.n_variants());
         let mut out: Vec<Vec<Vec<f64>>> = (0..n_var)
@@ -403,28 +404,55 @@ impl Design {
                 rest = tail;
             }
         }
-        let arch = pulp::Arch::new();
-        for (s, &rows) in self.segs.iter().enumerate() {
-            let work = |z: &mut Vec<f64>, (block, out): (&Block, &mut Vec<&mut [f64]>)| {
-                arch.dispatch(BlockProducts {
-                    n: self.n,
-                    table,
-                    b,
-                    block,
-                    rows,
-                    s,
-                    folds: n_var > 1,
-                    z,
-                    out,
-                })
-            };
-            let jobs: Vec<_> = self.blocks.iter().zip(per_block.iter_mut()).collect();
-            if parallel {
-                jobs.into_par_iter().for_each_init(Vec::new, work);
-            } else {
-                let mut z = Vec::new();
-                jobs.into_iter().for_each(|job| work(&mut z, job));
+        // runs of consecutive blocks of about equal work, one task each (one parallel region per
+        // product; a value does not depend on the run its block falls in)
+        let work_of = |block: &Block| block.parents.len() * block.children.len();
+        let tasks = if parallel {
+            4 * rayon::current_num_threads()
+        } else {
+            1
+        };
+        let share = self
+            .blocks
+            .iter()
+            .map(work_of)
+            .sum::<usize>()
+            .div_ceil(tasks);
+        let mut runs: Vec<(&[Block], &mut [Vec<&mut [f64]>])> = vec![];
+        let (mut blocks, mut outs) = (&self.blocks[..], &mut per_block[..]);
+        while !blocks.is_empty() {
+            let (mut len, mut work) = (1, work_of(&blocks[0]));
+            while len < blocks.len() && work + work_of(&blocks[len]) <= share {
+                work += work_of(&blocks[len]);
+                len += 1;
             }
+            let (run_outs, rest) = std::mem::take(&mut outs).split_at_mut(len);
+            runs.push((&blocks[..len], run_outs));
+            (blocks, outs) = (&blocks[len..], rest);
+        }
+        let arch = pulp::Arch::new();
+        let run = |(blocks, outs): (&[Block], &mut [Vec<&mut [f64]>])| {
+            let mut z = Vec::new();
+            for (s, &rows) in self.segs.iter().enumerate() {
+                for (block, out) in blocks.iter().zip(outs.iter_mut()) {
+                    arch.dispatch(BlockProducts {
+                        n: self.n,
+                        table,
+                        b,
+                        block,
+                        rows,
+                        s,
+                        folds: n_var > 1,
+                        z: &mut z,
+                        out,
+                    })
+                }
+            }
+        };
+        if parallel {
+            runs.into_par_iter().for_each(run);
+        } else {
+            runs.into_iter().for_each(run);
         }
         drop(per_block);
         // out[f + 1] holds segment f: fold f's training rows are all rows minus it
