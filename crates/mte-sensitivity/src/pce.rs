@@ -124,7 +124,8 @@ pub struct PceOutput {
     pub loo_error: f64,
     /// Training mean squared error / Var(y).
     pub train_error: f64,
-    /// OMP steps taken on the full-data path.
+    /// OMP steps taken on the full-data path (under K-fold CV the chosen size, unless the path
+    /// ran out of candidates or fitted the runs exactly before it).
     pub omp_steps: usize,
 }
 
@@ -475,7 +476,7 @@ struct BlockProducts<'a, 'b> {
     table: &'a [f64],
     b: &'a [&'a [f64]],
     block: &'a Block,
-    /// The segment's rows (start, len) and its index among `n_seg`.
+    /// The segment's rows (start, len) and its index.
     rows: (usize, usize),
     s: usize,
     /// Whether the rows are in folds (the segments are kept).
@@ -1131,7 +1132,7 @@ fn omp_select(
     loop {
         // The full path (0) only needs to reach the size the folds choose: it follows their
         // current choice, one step behind, and finishes the remaining steps (if any) alone.
-        let full_target = cv_choice(&paths[1..]).map_or(1, |c| c.0.max(1));
+        let full_target = cv_choice(&paths[1..], usize::MAX).map_or(1, |c| c.0);
         let live = |i: usize, p: &Path| {
             p.state == Stop::Running && (i > 0 || folds == 0 || p.active.len() < full_target)
         };
@@ -1185,7 +1186,7 @@ fn omp_select(
     let full = &paths[0];
     let var_y = full.var_y.max(f64::MIN_POSITIVE);
     let (p_star, cv_error) = if folds > 0 {
-        let (p, e) = cv_choice(&paths[1..]).unwrap_or((1, f64::INFINITY));
+        let (p, e) = cv_choice(&paths[1..], full.active.len()).unwrap_or((1, f64::INFINITY));
         (p, e / var_y)
     } else {
         let mut best = (1, f64::INFINITY);
@@ -1226,11 +1227,11 @@ fn omp_select(
     }
 }
 
-/// The K-fold choice from the fold paths so far: the size with the least hold-out mean squared
-/// error over all folds (a fold that ended keeps its last error), and that error; None before
-/// any fold has taken a step.
-fn cv_choice(folds: &[Path]) -> Option<(usize, f64)> {
-    let len = folds.iter().map(|p| p.hold_err.len()).max()?;
+/// The K-fold choice from the fold paths so far: the size (at most `limit`) with the least
+/// hold-out mean squared error over all folds (a fold that ended keeps its last error), and that
+/// error; None before any fold has taken a step.
+fn cv_choice(folds: &[Path], limit: usize) -> Option<(usize, f64)> {
+    let len = folds.iter().map(|p| p.hold_err.len()).max()?.min(limit);
     let mut best = None;
     for p in 1..=len {
         let mut s = 0.0;

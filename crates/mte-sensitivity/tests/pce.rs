@@ -144,6 +144,26 @@ fn ishigami_indices_and_intervals() {
     );
 }
 
+/// Under K-fold CV the full-data path is sized by the folds: it stops at the chosen size, neither
+/// beyond it (as long as a fold still runs) nor short of it (by its own corrected-LOO patience).
+#[test]
+fn kfold_full_path_stops_at_the_chosen_size() {
+    let f = Ishigami::default();
+    for seed in 0..3 {
+        let params = PceParams {
+            degree: 8,
+            adaptive_degree: false,
+            n_samples: 200,
+            seed,
+            ..Default::default()
+        };
+        let r = build_pce(&f, &Ishigami::problem(), &params).unwrap();
+        let o = &r.outputs[0];
+        assert!(o.terms.len() > 5, "seed {seed}: {} terms", o.terms.len());
+        assert_eq!(o.omp_steps, o.terms.len(), "seed {seed}");
+    }
+}
+
 #[test]
 fn identical_across_thread_counts() {
     let f = MultiOutput::new(2, |x: &[f64], y: &mut [f64]| {
