@@ -11,8 +11,11 @@
 //! (default: each fold runs its own path on its training rows, the error on the held-out rows is
 //! averaged over folds at each path length, the size with the smallest error is refitted on all
 //! runs) or by the corrected leave-one-out error (Blatman & Sudret 2011:
-//! LOO·n/(n − p)·(1 + tr(C⁻¹)/n), C = Ψ_AᵀΨ_A/n). One seeded fold partition serves every
-//! output. The correlations Ψ_vᵀr of each path (row variant v: all rows, or all but one fold) are
+//! LOO·n/(n − p)·(1 + tr(C⁻¹)/n), C = Ψ_AᵀΨ_A/n). A path that is sized by its own error (a fold
+//! path, or the single path under corrected LOO) stops max(10, p*/5) steps after the size p* of
+//! its smallest error so far, at `max_terms` or when the runs are fitted exactly; under K-fold
+//! the full-data path is only taken as far as the folds' choice. One seeded fold partition serves
+//! every output. The correlations Ψ_vᵀr of each path (row variant v: all rows, or all but one fold) are
 //! updated after each step from the Gram columns Ψ_vᵀψ_a of the chosen candidate, cached and
 //! shared by all paths and outputs of one design. Ψ itself is never stored: every product Ψᵀ·B
 //! is computed block by block from the univariate values (see `Design`), each value one
