@@ -15,12 +15,12 @@
 //! path, or the single path under corrected LOO) stops max(10, p*/5) steps after the size p* of
 //! its smallest error so far, at `max_terms` or when the runs are fitted exactly; under K-fold
 //! the full-data path is only taken as far as the folds' choice. One seeded fold partition serves
-//! every output. The correlations Ψ_vᵀr of each path (row variant v: all rows, or all but one fold) are
-//! updated after each step from the Gram columns Ψ_vᵀψ_a of the chosen candidate, cached and
-//! shared by all paths and outputs of one design. Ψ itself is never stored: every product Ψᵀ·B
-//! is computed block by block from the univariate values (see `Design`), each value one
-//! fixed-order dot product, so results do not depend on timing, batching or thread count. The
-//! degree is chosen the same way when `adaptive_degree` is on (degrees 1 … p, stop when the
+//! every output. The correlations Ψ_vᵀr of each path (row variant v: all rows, or all but one
+//! fold) are updated after each step from the Gram columns Ψ_vᵀψ_a of the chosen candidate,
+//! cached and shared by all paths and outputs of one design. Ψ itself is never stored: every
+//! product Ψᵀ·B is computed block by block from the univariate values (see `Design`), each value
+//! one fixed-order dot product, so results do not depend on timing, batching or thread count.
+//! The degree is chosen the same way when `adaptive_degree` is on (degrees 1 … p, stop when the
 //! error grows).
 //!
 //! Sobol' indices from the coefficients (Sudret 2008): V = Σ_{α≠0} c_α², Sᵢ = Σ_{α: only i} c_α²/V,
@@ -259,6 +259,13 @@ struct Block {
     children: Vec<usize>,
 }
 
+impl Block {
+    /// Number of candidates (parents × children), also the block's share of a product's work.
+    fn len(&self) -> usize {
+        self.parents.len() * self.children.len()
+    }
+}
+
 /// Largest number of parents in one block: two passes of the four-wide register block for one
 /// right-hand side, and few enough z vectors (b ⊙ π) to stay in L1 while the children stream
 /// past; more blocks also share the work out more evenly over threads.
@@ -402,15 +409,13 @@ impl Design {
         for values in out.iter_mut().flatten() {
             let mut rest = values.as_mut_slice();
             for (block, mine) in self.blocks.iter().zip(per_block.iter_mut()) {
-                let size = block.parents.len() * block.children.len();
-                let (head, tail) = std::mem::take(&mut rest).split_at_mut(size);
+                let (head, tail) = std::mem::take(&mut rest).split_at_mut(block.len());
                 mine.push(head);
                 rest = tail;
             }
         }
         // runs of consecutive blocks of about equal work, one task each (one parallel region per
         // product; a value does not depend on the run its block falls in)
-        let work_of = |block: &Block| block.parents.len() * block.children.len();
         let tasks = if parallel {
             4 * rayon::current_num_threads()
         } else {
@@ -419,15 +424,15 @@ impl Design {
         let share = self
             .blocks
             .iter()
-            .map(work_of)
+            .map(Block::len)
             .sum::<usize>()
             .div_ceil(tasks);
         let mut runs: Vec<(&[Block], &mut [Vec<&mut [f64]>])> = vec![];
         let (mut blocks, mut outs) = (&self.blocks[..], &mut per_block[..]);
         while !blocks.is_empty() {
-            let (mut len, mut work) = (1, work_of(&blocks[0]));
-            while len < blocks.len() && work + work_of(&blocks[len]) <= share {
-                work += work_of(&blocks[len]);
+            let (mut len, mut work) = (1, blocks[0].len());
+            while len < blocks.len() && work + blocks[len].len() <= share {
+                work += blocks[len].len();
                 len += 1;
             }
             let (run_outs, rest) = std::mem::take(&mut outs).split_at_mut(len);
@@ -789,9 +794,6 @@ struct Path {
     best_p: usize,
     state: Stop,
     kmax: usize,
-    /// Whether the path ends by its own criterion (hold-out error of a fold, corrected LOO
-    /// without folds); the full path under K-fold is sized by the folds ([`omp_select`]).
-    own_stop: bool,
     /// Active-set size from which steps are [`Path::direct`].
     direct_after: usize,
 }
@@ -854,7 +856,6 @@ impl Path {
             best_p: 0,
             state: Stop::Running,
             kmax,
-            own_stop: variant > 0 || d.segs.len() == 1,
             direct_after,
         }
     }
@@ -1067,7 +1068,10 @@ impl Path {
         }
         let rr: f64 = self.resid.iter().map(|a| a * a).sum();
         let patience = 10.max(self.best_p / 5);
-        let own_end = self.own_stop && p - self.best_p >= patience;
+        // a path ends by its own criterion (hold-out error of a fold, corrected LOO without
+        // folds); the full path under K-fold is sized by the folds ([`omp_select`])
+        let own_criterion = self.variant > 0 || d.segs.len() == 1;
+        let own_end = own_criterion && p - self.best_p >= patience;
         if p >= self.kmax || rr <= 1e-26 * self.y_norm2 || own_end {
             self.state = Stop::Done;
         }

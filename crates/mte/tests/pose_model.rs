@@ -496,7 +496,7 @@ fn seed003_tolerance_fixture_is_the_study() {
             param.aliases
         );
         let sd = input.dist.sd();
-        let want = if study.parameters()[i].quantity == mte_errors::units::Kind::Angle {
+        let want = if param.quantity == mte_errors::units::Kind::Angle {
             10.0 / 3.0 * arcsec
         } else {
             0.005
