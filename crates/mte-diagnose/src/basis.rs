@@ -144,17 +144,20 @@ fn distinct_sorted(values: &[f64]) -> Vec<f64> {
     sorted
 }
 
-/// Time constants to scan for a first-order thermal drift: log-spaced from 1/20 to 2 times the
-/// time span of the data.
-pub(crate) fn time_constants_to_scan(times: &[f64]) -> Vec<f64> {
+/// Time constants to scan for a first-order thermal drift: log-spaced from 1/20 of the time span
+/// of the data (but never below `floor`, the interval between repeated visits of a pose, which
+/// a faster drift could not be told from a dependence on the pose by) to twice the span.
+pub(crate) fn time_constants_to_scan(times: &[f64], floor: f64) -> Vec<f64> {
     let (lo, hi) = range(times);
     let span = hi - lo;
-    if span.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
+    let shortest = (span / 20.0).max(floor);
+    let longest = 2.0 * span;
+    if longest.partial_cmp(&shortest) != Some(std::cmp::Ordering::Greater) {
         return Vec::new();
     }
     let count = 12;
     (0..count)
-        .map(|k| span / 20.0 * 40f64.powf(k as f64 / (count - 1) as f64))
+        .map(|k| shortest * (longest / shortest).powf(k as f64 / (count - 1) as f64))
         .collect()
 }
 

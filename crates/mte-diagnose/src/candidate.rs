@@ -36,6 +36,45 @@ pub trait Candidate: Send + Sync {
     fn refine(&self, _best: usize, _score: &dyn Fn(&Term) -> f64) -> Option<Term> {
         None
     }
+
+    /// The variant `variant` with its hyper-parameter (period, time constant) set to `value`;
+    /// `None` for a cause without one. The diagnosis uses it for the uncertainty that the
+    /// hyper-parameter adds to the effect's size.
+    fn at(&self, _variant: usize, _value: f64) -> Option<Term> {
+        None
+    }
+
+    /// The name of a model term this cause builds on: a thermal drift of `EX0B` is a candidate
+    /// only once `EX0B` itself is in the model (in the base, or found first).
+    fn requires(&self) -> Option<&str> {
+        None
+    }
+}
+
+/// A cause that is a candidate only once the term it builds on is in the model.
+pub struct Requires {
+    /// Name of the term it needs.
+    pub term: String,
+    /// The cause.
+    pub inner: Box<dyn Candidate>,
+}
+
+impl Candidate for Requires {
+    fn variants(&self, obs: &Observations) -> Vec<Term> {
+        self.inner.variants(obs)
+    }
+
+    fn refine(&self, best: usize, score: &dyn Fn(&Term) -> f64) -> Option<Term> {
+        self.inner.refine(best, score)
+    }
+
+    fn at(&self, variant: usize, value: f64) -> Option<Term> {
+        self.inner.at(variant, value)
+    }
+
+    fn requires(&self) -> Option<&str> {
+        Some(&self.term)
+    }
 }
 
 impl Candidate for Term {
@@ -130,16 +169,19 @@ pub fn physical_effects(
     drifting: &[&Term],
 ) -> Vec<Box<dyn Candidate>> {
     let mut out: Vec<Box<dyn Candidate>> = Vec::new();
+    // Time effects only where a pose is measured again later: otherwise a drift cannot be told
+    // from a dependence on the pose, and its time constant cannot be shorter than the interval
+    // between the visits that reveal it.
     let time = obs
         .variable_of_kind(VariableKind::Time)
         .filter(|t| varies(&t.values))
-        .map(|t| t.values.clone());
+        .and_then(|t| Some((t.values.clone(), obs.revisit_interval()?)));
     let direction = obs
         .variable_of_kind(VariableKind::Direction)
         .filter(|d| varies(&d.values))
         .map(|d| d.values.clone());
     let n = obs.len();
-    let times = time.as_deref();
+    let times = time.as_ref().map(|(t, floor)| (t.as_slice(), *floor));
     for slot in slots {
         if slot.column.iter().all(|v| v.abs() < 1e-15) {
             continue;
@@ -172,8 +214,13 @@ pub fn physical_effects(
                     column_matrix(&slot.constant_column()),
                     slot.quantity,
                 );
-                if let Some(t_values) = times {
-                    out.extend(drift_candidates(&t, t_values));
+                if let Some((t_values, floor)) = times {
+                    for drift in drift_candidates(&t, t_values, floor) {
+                        out.push(Box::new(Requires {
+                            term: t.name.clone(),
+                            inner: drift,
+                        }));
+                    }
                 }
                 out.push(Box::new(t));
             }
@@ -283,10 +330,10 @@ pub fn physical_effects(
             }
         }
     }
-    if let Some(t_values) = times {
+    if let Some((t_values, floor)) = times {
         for t in drifting {
             if t.width() == 1 && !matches!(t.family, Family::Drift { .. }) {
-                out.extend(drift_candidates(t, t_values));
+                out.extend(drift_candidates(t, t_values, floor));
             }
         }
     }
@@ -340,6 +387,10 @@ impl Candidate for Scan {
         let p = 0.5 * (a + b);
         (f(p) < f(self.grid[best])).then(|| (self.make)(p))
     }
+
+    fn at(&self, _variant: usize, value: f64) -> Option<Term> {
+        Some((self.make)(value))
+    }
 }
 
 /// A set of alternative terms for one cause.
@@ -351,7 +402,9 @@ impl Candidate for Alternatives {
     }
 }
 
-fn drift_candidates(constant: &Term, t: &[f64]) -> Vec<Box<dyn Candidate>> {
+/// Linear and first-order thermal drift of a constant; time constants from `floor` (the
+/// interval between repeated visits of a pose) up.
+fn drift_candidates(constant: &Term, t: &[f64], floor: f64) -> Vec<Box<dyn Candidate>> {
     let t0 = t.iter().copied().fold(f64::INFINITY, f64::min);
     let q = constant.coefficients[0].1;
     let rate = match q {
@@ -394,7 +447,7 @@ fn drift_candidates(constant: &Term, t: &[f64]) -> Vec<Box<dyn Candidate>> {
         separated_by: None,
     };
     let exponential = Scan {
-        grid: time_constants_to_scan(t),
+        grid: time_constants_to_scan(t, floor),
         refine_grid: true,
         make: Box::new(make),
     };

@@ -135,6 +135,44 @@ impl Observations {
         Ok(())
     }
 
+    /// The typical interval between two visits of the same pose (same channel, commanded axes
+    /// and direction, in any setup): the median over consecutive repeat visits, in s. `None`
+    /// without a time column, or when no pose is measured twice — time-dependent effects are then
+    /// indistinguishable from pose-dependent ones.
+    pub fn revisit_interval(&self) -> Option<f64> {
+        let t = self.variable_of_kind(VariableKind::Time)?;
+        let pose: Vec<&Variable> = self
+            .variables
+            .iter()
+            .filter(|v| v.kind != VariableKind::Time)
+            .collect();
+        // Poses compared to a nanometre / microradian (commanded values repeat exactly).
+        let keys: Vec<Vec<i64>> = (0..self.len())
+            .map(|i| {
+                let mut k = vec![self.channel[i] as i64];
+                k.extend(pose.iter().map(|v| (v.values[i] * 1e6).round() as i64));
+                k
+            })
+            .collect();
+        let mut order: Vec<usize> = (0..self.len()).collect();
+        order.sort_by(|&a, &b| {
+            keys[a]
+                .cmp(&keys[b])
+                .then(t.values[a].total_cmp(&t.values[b]))
+        });
+        let mut gaps: Vec<f64> = order
+            .windows(2)
+            .filter(|w| keys[w[0]] == keys[w[1]])
+            .map(|w| t.values[w[1]] - t.values[w[0]])
+            .filter(|g| *g > 0.0)
+            .collect();
+        if gaps.is_empty() {
+            return None;
+        }
+        gaps.sort_by(f64::total_cmp);
+        Some(gaps[gaps.len() / 2])
+    }
+
     /// The order in which observations were taken: by time when the data have a time column,
     /// else by row. Cross-validation folds are contiguous blocks of this order.
     pub(crate) fn acquisition_order(&self) -> Vec<usize> {

@@ -1,36 +1,45 @@
 //! The diagnosis loop: fit the base model, test the residuals for structure, try every candidate
-//! effect on data the fit did not see, name the cause, extend the model, repeat.
+//! effect on data the fit did not see, name the cause, extend the model, repeat; then re-test
+//! every cause in the complete model, and measure the gain of the whole search on data it did
+//! not see.
 
-use mte_linalg::lstsq::{RankTolerance, identifiability};
+use std::collections::HashMap;
+
 use mte_linalg::{DMat, DVec, stats};
+use rayon::prelude::*;
 use serde::Serialize;
 
 use crate::candidate::Candidate;
 use crate::data::Observations;
 use crate::fit::{
-    Folds, Projector, SEPARABILITY_TOLERANCE, design, max_abs, rms, solve, whitening,
+    Folds, Increment, Projector, SEPARABILITY_TOLERANCE, Solution, design, max_abs, rms, solve,
+    whitening,
 };
 use crate::structure::{StructureTest, structure_tests};
-use crate::term::{Estimate, Family, Quantity, Term};
+use crate::term::{Estimate, Family, Quantity, Summary, Term};
 use crate::{DiagnoseError, Result};
 
 /// Settings of the diagnosis (builder).
 #[derive(Debug, Clone)]
 pub struct DiagnoseParams {
     /// Family-wise significance level of a discovery (Bonferroni over every candidate variant
-    /// tried in a step). Default 0.001.
+    /// tried in a step), in (0, 0.5). Default 0.001.
     pub alpha: f64,
-    /// Number of cross-validation folds. Default 5.
+    /// Number of cross-validation folds inside the search. Default 5.
     pub folds: usize,
     /// Contiguous blocks per fold. Default 10.
     pub blocks_per_fold: usize,
-    /// Smallest relative fall of the held-out RMS for an effect to be kept. Default 0.02.
+    /// Smallest relative fall of the cross-validated RMS for an effect to be kept. Default 0.02.
     pub min_gain: f64,
-    /// Most effects added. Default 6.
+    /// Most effects added. Default 10. When the search would have gone on, the diagnosis says
+    /// it is incomplete.
     pub max_effects: usize,
     /// Candidates examined by cross-validation in each step (the most significant ones).
     /// Default 8.
     pub shortlist: usize,
+    /// Outer folds of the honest held-out figures: the whole search (choice of terms, periods,
+    /// time constants) is repeated without each fold and predicts it. Default 5; 0 skips them.
+    pub outer_folds: usize,
 }
 
 impl Default for DiagnoseParams {
@@ -40,11 +49,17 @@ impl Default for DiagnoseParams {
             folds: 5,
             blocks_per_fold: 10,
             min_gain: 0.02,
-            max_effects: 6,
+            max_effects: 10,
             shortlist: 8,
+            outer_folds: 5,
         }
     }
 }
+
+/// σ0 up to which residuals count as consistent with a stated noise even when the χ² test,
+/// with thousands of observations, rejects it: a stated standard uncertainty is rarely known
+/// better than ±50 %.
+pub const STATED_NOISE_TOLERANCE: f64 = 1.5;
 
 /// How well one model explains the data.
 #[derive(Debug, Clone, Serialize)]
@@ -53,10 +68,12 @@ pub struct FitQuality {
     pub rms: f64,
     /// Largest absolute residual of the fit, mm.
     pub max_abs: f64,
-    /// RMS of the held-out (cross-validated) residuals, mm.
-    pub held_out_rms: f64,
-    /// Largest absolute held-out residual, mm.
-    pub held_out_max_abs: f64,
+    /// RMS of the cross-validated residuals of this model with its terms fixed, mm (for the
+    /// base model an honest held-out figure; for the extended model not, since the terms were
+    /// chosen on the same folds — see [`Diagnosis::held_out`]).
+    pub cv_rms: f64,
+    /// Largest absolute cross-validated residual, mm.
+    pub cv_max_abs: f64,
     /// A-posteriori standard deviation of unit weight √(RSS_w / dof) (≈ 1 when the residuals
     /// match the stated noise; the residual RMS in mm when none is stated).
     pub sigma0: f64,
@@ -64,6 +81,25 @@ pub struct FitQuality {
     pub dof: usize,
     /// p-value of the χ² test of the residuals against the stated noise (`None` without one).
     pub chi2_p_value: Option<f64>,
+}
+
+/// The gain of the diagnosis on data it did not see: the observations are cut into
+/// [`DiagnoseParams::outer_folds`] folds of contiguous blocks; for each, the base model is fitted
+/// and the whole search run on the other folds, and both predict the fold.
+#[derive(Debug, Clone, Serialize)]
+pub struct HeldOut {
+    /// Number of outer folds.
+    pub folds: usize,
+    /// RMS of the base model's held-out residuals, mm.
+    pub base_rms: f64,
+    /// Largest absolute held-out residual of the base model, mm.
+    pub base_max_abs: f64,
+    /// RMS of the diagnosed model's held-out residuals, mm.
+    pub diagnosed_rms: f64,
+    /// Largest absolute held-out residual of the diagnosed model, mm.
+    pub diagnosed_max_abs: f64,
+    /// The causes each fold's search named (a stable diagnosis names the same in every fold).
+    pub per_fold: Vec<Vec<String>>,
 }
 
 /// An estimated model parameter.
@@ -86,14 +122,20 @@ pub struct Finding {
     pub meaning: String,
     /// Family of effect.
     pub family: Family,
-    /// Estimated size with standard uncertainty, in the final model.
+    /// Estimated size with standard uncertainty, in the final model (the uncertainty includes
+    /// that of the period or time constant).
     pub estimates: Vec<Estimate>,
+    /// The period or time constant with its standard uncertainty, where the effect has one.
+    pub hyper_parameter: Option<Estimate>,
     /// Bonferroni-adjusted p-value when it was added.
     pub p_value: f64,
-    /// Held-out RMS before and after adding it, mm.
-    pub held_out_rms_before: f64,
-    /// Held-out RMS after adding it, mm.
-    pub held_out_rms_after: f64,
+    /// Bonferroni-adjusted p-value of removing it from the complete model.
+    pub p_value_final: f64,
+    /// Cross-validated RMS inside the search before adding it, mm (a selection score: the
+    /// terms were chosen on these folds).
+    pub cv_rms_before: f64,
+    /// Cross-validated RMS inside the search after adding it, mm.
+    pub cv_rms_after: f64,
     /// Other candidates that explain the same residual equally well with this data.
     pub alternatives: Vec<String>,
     /// The measurement that would tell it apart from the alternatives.
@@ -102,10 +144,10 @@ pub struct Finding {
     pub exposed_by: Option<String>,
 }
 
-/// A candidate the data cannot separate from the current model.
+/// A candidate (or base parameter) the data cannot separate from the model.
 #[derive(Debug, Clone, Serialize)]
 pub struct NotSeparable {
-    /// Candidate name.
+    /// Candidate or parameter name.
     pub name: String,
     /// What engineers call it.
     pub label: String,
@@ -124,8 +166,8 @@ pub struct CandidateScore {
     pub p_value: f64,
     /// Share of the current residual it explains.
     pub share_of_residual: f64,
-    /// Held-out RMS with it added, mm (for the shortlisted ones).
-    pub held_out_rms: Option<f64>,
+    /// Cross-validated RMS with it added, mm (for the shortlisted significant ones).
+    pub cv_rms: Option<f64>,
 }
 
 /// One step of the search.
@@ -139,19 +181,36 @@ pub struct Step {
     pub variants_tested: usize,
 }
 
-/// Residuals against one covariate before and after the extension, for a plot.
+/// The evidence of one finding (or of unexplained structure) for a plot: the residuals of the
+/// final model without the finding against the covariate that exposes it, and the finding's
+/// fitted effect.
 #[derive(Debug, Clone, Serialize)]
 pub struct ResidualSeries {
     /// Covariate name.
     pub variable: String,
+    /// The finding shown, `None` for unexplained structure.
+    pub finding: Option<String>,
     /// Covariate values (mm, rad, s or ±1).
     pub x: Vec<f64>,
     /// Channel of each point.
     pub channel: Vec<usize>,
-    /// Held-out residuals of the base model, mm.
-    pub before: Vec<f64>,
-    /// Held-out residuals of the extended model, mm.
-    pub after: Vec<f64>,
+    /// Residuals of the final model with this finding left out, mm.
+    pub residual: Vec<f64>,
+    /// The finding's fitted effect at each observation, mm (zero for unexplained structure).
+    pub effect: Vec<f64>,
+}
+
+/// The verdict of a diagnosis.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[non_exhaustive]
+pub enum Verdict {
+    /// Nothing found and the base model's residuals are consistent with the noise.
+    NoDiscrepancy,
+    /// Causes found, and the extended model's residuals are consistent with the noise.
+    Explained,
+    /// Structure remains that no candidate explains (with or without findings): see
+    /// [`Diagnosis::remaining_structure`].
+    Unexplained,
 }
 
 /// Everything the diagnosis found; serialises to the JSON report.
@@ -170,8 +229,17 @@ pub struct Diagnosis {
     pub quantity: Quantity,
     /// Stated noise (RMS of σ), mm (or rad), if any.
     pub stated_noise: Option<f64>,
+    /// The verdict.
+    pub verdict: Verdict,
+    /// Why the search is incomplete, when a limit (not its own criterion) stopped it.
+    pub incomplete: Option<String>,
+    /// What these data cannot test (e.g. no pose measured twice: no time effects).
+    pub notes: Vec<String>,
     /// Base model parameters as fitted.
     pub base_parameters: Vec<ParameterEstimate>,
+    /// Parameters of the stated base model that these data cannot separate from the rest of it
+    /// (left out of the fit; their effect is carried by the ones they are confounded with).
+    pub base_not_separable: Vec<NotSeparable>,
     /// Base model quality.
     pub base: FitQuality,
     /// Residual RMS of the base model per setup, mm.
@@ -184,23 +252,29 @@ pub struct Diagnosis {
     pub steps: Vec<Step>,
     /// The named causes, in the order found.
     pub findings: Vec<Finding>,
+    /// Causes added by the search and removed again when re-tested in the complete model.
+    pub pruned: Vec<String>,
     /// Candidates the data cannot separate from the model.
     pub not_separable: Vec<NotSeparable>,
     /// Extended model quality.
     pub extended: FitQuality,
     /// All parameters of the extended model.
     pub extended_parameters: Vec<ParameterEstimate>,
-    /// Residuals for plots: against the covariate that exposes each finding (or the most
-    /// significant structure when nothing was found).
+    /// Significant structure tests of the extended model's residuals: what nothing in the
+    /// library explains.
+    pub remaining_structure: Vec<StructureTest>,
+    /// Gain on data the search did not see (`None` when outer folds are off).
+    pub held_out: Option<HeldOut>,
+    /// Evidence for plots: one series per finding, or per unexplained structure.
     pub residual_series: Vec<ResidualSeries>,
     /// Significance level used.
     pub alpha: f64,
 }
 
 impl Diagnosis {
-    /// `true` when nothing was found: the base model explains the data to the noise.
+    /// `true` when nothing was found and the base model explains the data to the noise.
     pub fn no_discrepancy(&self) -> bool {
-        self.findings.is_empty()
+        self.verdict == Verdict::NoDiscrepancy
     }
 
     /// The finding called `name`.
@@ -209,23 +283,13 @@ impl Diagnosis {
     }
 }
 
-struct ModelState {
-    terms: Vec<Term>,
-}
-
-impl ModelState {
-    fn design(&self, n: usize) -> DMat {
-        design(&self.terms.iter().collect::<Vec<_>>(), n)
-    }
-}
-
 /// Runs the diagnosis.
 ///
 /// # Errors
-/// [`DiagnoseError::InvalidData`] for bad observations; [`DiagnoseError::NotIdentifiable`] when
-/// the base model itself is rank deficient on these data (the message names the combinations);
+/// [`DiagnoseError::InvalidData`] for bad observations or settings;
 /// [`DiagnoseError::TooFewObservations`] when there are not enough observations for the base
-/// model and cross-validation.
+/// model and cross-validation. Base parameters the data cannot separate are not an error: they
+/// are left out and listed in [`Diagnosis::base_not_separable`].
 pub fn diagnose(
     obs: &Observations,
     base: Vec<Term>,
@@ -233,30 +297,37 @@ pub fn diagnose(
     params: &DiagnoseParams,
 ) -> Result<Diagnosis> {
     obs.validate()?;
+    check_params(params)?;
     let n = obs.len();
     let w = whitening(obs);
+    let (base, base_not_separable) = separable_base(base, &w);
     let base_width: usize = base.iter().map(Term::width).sum();
-    if n < base_width + 2 * params.folds + 2 {
+    let needed = base_width + 2 * params.folds.max(params.outer_folds) + 2;
+    if n < needed {
         return Err(DiagnoseError::TooFewObservations {
             observations: n,
-            needed: base_width + 2 * params.folds + 2,
+            needed,
         });
     }
-    check_identifiable(&base, obs, &w)?;
-    let folds = Folds::blocked(obs, params.folds, params.blocks_per_fold);
-    let mut model = ModelState { terms: base };
-    let x0 = model.design(n);
+    let pool = Pool::new(obs, candidates, &base);
+    let searcher = Searcher {
+        obs,
+        base: &base,
+        pool: &pool,
+        candidates,
+        params,
+    };
+    let everything = vec![true; n];
+    let folds = Folds::blocked(obs, &everything, params.folds, params.blocks_per_fold);
+    // The search on all data and the outer folds' searches are independent: run them together.
+    let (search, held_out) = rayon::join(|| searcher.search(&w, &folds), || searcher.held_out(&w));
+
+    let x0 = design(&base.iter().collect::<Vec<_>>(), n);
     let base_sol = solve(&x0, &obs.values, &w);
     let base_cv = folds.residuals(&x0, &obs.values, &w);
-    let base_quality = quality(
-        obs,
-        &base_sol.residuals,
-        &base_cv,
-        base_sol.rss_w,
-        n - base_sol.rank,
-    );
+    let base_quality = quality(obs, &base_sol, &base_cv);
     let base_parameters = parameters(
-        &model.terms,
+        &base,
         &base_sol.coef,
         &covariance(obs, &base_sol.cofactor, base_quality.sigma0),
     );
@@ -266,237 +337,87 @@ pub fn diagnose(
         &base_sol.residuals,
         &w,
         base_sol.rss_w,
-        n - base_sol.rank,
+        base_sol.dof(),
     );
 
-    let mut pool: Vec<Vec<Term>> = Vec::new();
-    let mut source: Vec<usize> = Vec::new(); // the candidate each pool entry came from
-    for (k, c) in candidates.iter().enumerate() {
-        let v: Vec<Term> = c
-            .variants(obs)
+    let mut terms: Vec<Term> = base.clone();
+    terms.extend(search.chosen.iter().map(|c| c.term.clone()));
+    let x = design(&terms.iter().collect::<Vec<_>>(), n);
+    let sol = solve(&x, &obs.values, &w);
+    let cv = folds.residuals(&x, &obs.values, &w);
+    let extended = quality(obs, &sol, &cv);
+    let scale = covariance_scale(obs, extended.sigma0);
+    let (cov, hyper_u) = covariance_with_hyper(&searcher, &search.chosen, &x, &sol, &w);
+    let extended_parameters = parameters(&terms, &sol.coef, &(cov * scale));
+    let finals = searcher.removal_p_values(&search.chosen, &w, &sol);
+    let findings: Vec<Finding> = search
+        .chosen
+        .iter()
+        .enumerate()
+        .map(|(k, c)| Finding {
+            name: c.term.name.clone(),
+            label: c.term.label.clone(),
+            meaning: c.term.meaning.clone(),
+            family: c.term.family.clone(),
+            estimates: extended_parameters[base.len() + k].estimates.clone(),
+            hyper_parameter: hyper_of(&c.term.family).zip(hyper_u[k]).map(|((v, q), u)| {
+                let u = u * scale.sqrt();
+                Estimate {
+                    name: if q == Quantity::Duration {
+                        "time constant".into()
+                    } else {
+                        "period".into()
+                    },
+                    value: v,
+                    uncertainty: u,
+                    quantity: q,
+                    text: q.format(v, u),
+                }
+            }),
+            p_value: c.p_value,
+            p_value_final: finals[k],
+            cv_rms_before: c.cv_before,
+            cv_rms_after: c.cv_after,
+            alternatives: c.alternatives.clone(),
+            separated_by: c.separated_by.clone(),
+            exposed_by: c.term.exposed_by.clone(),
+        })
+        .collect();
+    let remaining_structure: Vec<StructureTest> =
+        structure_tests(obs, &x, &sol.residuals, &w, sol.rss_w, sol.dof())
             .into_iter()
-            .filter(|t| !t.is_invisible() && t.columns.nrows() == n)
+            .filter(|t| t.is_significant(params.alpha))
             .collect();
-        if !v.is_empty() {
-            pool.push(v);
-            source.push(k);
-        }
+    let consistent_with_noise = extended.chi2_p_value.is_none_or(|p| p >= params.alpha)
+        || extended.sigma0 <= STATED_NOISE_TOLERANCE;
+    let verdict = if !remaining_structure.is_empty() || !consistent_with_noise {
+        Verdict::Unexplained
+    } else if findings.is_empty() {
+        Verdict::NoDiscrepancy
+    } else {
+        Verdict::Explained
+    };
+    let incomplete = search.hit_limit.then(|| {
+        format!(
+            "the search stopped at its limit of {} effects while a further candidate was still significant and improved the cross-validated RMS; more causes may remain",
+            params.max_effects
+        )
+    });
+    let mut notes = Vec::new();
+    if obs
+        .variable_of_kind(crate::data::VariableKind::Time)
+        .is_some()
+        && obs.revisit_interval().is_none()
+    {
+        notes.push("no pose is measured twice: time-dependent effects (thermal drift) cannot be told from pose-dependent ones and were not tested".to_string());
     }
-    let mut used = vec![false; pool.len()];
-    let mut times_chosen = vec![0usize; pool.len()];
-    let mut scanned: Vec<ScannedTerm> = Vec::new();
-    let mut steps = Vec::new();
-    let mut findings: Vec<Finding> = Vec::new();
-    let mut not_separable: Vec<NotSeparable> = Vec::new();
-    let mut current_cv = base_cv.clone();
-    let mut current_sol = base_sol.clone();
-
-    for _ in 0..params.max_effects {
-        let x = model.design(n);
-        let projector = Projector::new(&x, &w);
-        let dof = n - current_sol.rank;
-        let variants_tested: usize = pool
-            .iter()
-            .enumerate()
-            .filter(|(i, _)| !used[*i])
-            .map(|(_, v)| v.len())
-            .sum();
-        let mut scored: Vec<(usize, usize, f64, f64)> = Vec::new(); // (candidate, variant, p, share)
-        for ci in 0..pool.len() {
-            if used[ci] {
-                continue;
-            }
-            let variants = &pool[ci];
-            let mut best: Option<(usize, crate::fit::Increment)> = None;
-            for (vi, t) in variants.iter().enumerate() {
-                let inc = projector.increment(&t.columns, &current_sol.residuals);
-                if inc.separability < SEPARABILITY_TOLERANCE || inc.new_rank < t.width() {
-                    continue;
-                }
-                if best
-                    .as_ref()
-                    .is_none_or(|(_, b)| inc.delta_rss > b.delta_rss)
-                {
-                    best = Some((vi, inc));
-                }
-            }
-            let Some((vi, mut inc)) = best else {
-                if steps.is_empty() {
-                    record_not_separable(&mut not_separable, &variants[0], &model.terms, &x, &w);
-                }
-                continue;
-            };
-            let rss = current_sol.rss_w;
-            let residuals = &current_sol.residuals;
-            let score = |t: &Term| rss - projector.increment(&t.columns, residuals).delta_rss;
-            if let Some(refined) = candidates[source[ci]].refine(vi, &score) {
-                inc = projector.increment(&refined.columns, residuals);
-                pool[ci][vi] = nth_component(refined, times_chosen[ci]);
-            }
-            let k = inc.new_rank;
-            if dof <= k + 1 {
-                continue;
-            }
-            let rss_new = (current_sol.rss_w - inc.delta_rss).max(1e-300);
-            let f = (inc.delta_rss / k as f64) / (rss_new / (dof - k) as f64);
-            let p = (stats::f_sf(f, k as f64, (dof - k) as f64) * variants_tested as f64).min(1.0);
-            scored.push((ci, vi, p, inc.delta_rss / current_sol.rss_w.max(1e-300)));
-        }
-        scored.sort_by(|a, b| {
-            a.2.partial_cmp(&b.2)
-                .unwrap_or(std::cmp::Ordering::Equal)
-                .then(b.3.total_cmp(&a.3))
-        });
-        let cur_cv_rms = rms(&current_cv);
-        let mut ranking = Vec::new();
-        let mut best: Option<(usize, usize, f64, DVec)> = None; // (candidate, variant, cv rms, cv residuals)
-        for &(ci, vi, p, share) in scored.iter().take(params.shortlist) {
-            let mut held_out_rms = None;
-            if p < params.alpha {
-                let t = &pool[ci][vi];
-                let xc = hcat(&x, &t.columns);
-                let cv = folds.residuals(&xc, &obs.values, &w);
-                let r = rms(&cv);
-                held_out_rms = Some(r);
-                let better = match &best {
-                    None => true,
-                    Some((bc, bv, br, _)) => {
-                        let (b_cost, t_cost) = (complexity(&pool[*bc][*bv]), complexity(t));
-                        // Parsimony: within 1 % of the best held-out RMS the simpler cause wins.
-                        if (r - br).abs() <= 0.01 * br {
-                            t_cost < b_cost || (t_cost == b_cost && r < *br)
-                        } else {
-                            r < *br
-                        }
-                    }
-                };
-                if better {
-                    best = Some((ci, vi, r, cv));
-                }
-            }
-            ranking.push(CandidateScore {
-                name: pool[ci][vi].name.clone(),
-                p_value: p,
-                share_of_residual: share,
-                held_out_rms,
-            });
-        }
-        let accepted = best.filter(|(_, _, r, _)| *r < cur_cv_rms * (1.0 - params.min_gain));
-        let Some((ci, vi, new_rms, cv)) = accepted else {
-            steps.push(Step {
-                ranking,
-                added: None,
-                variants_tested,
-            });
-            break;
-        };
-        let chosen = pool[ci][vi].clone();
-        // Alternatives: shortlisted candidates that explain the same residual direction about as
-        // well on held-out data (within 2 %).
-        let chosen_perp = projector.residual_part(&chosen.columns);
-        let mut alternatives = Vec::new();
-        for score in ranking.iter().filter(|c| c.name != chosen.name) {
-            let Some(r) = score.held_out_rms else {
-                continue;
-            };
-            if r > new_rms * 1.02 {
-                continue;
-            }
-            let Some(&(cj, vj, _, _)) = scored.iter().find(|s| pool[s.0][s.1].name == score.name)
-            else {
-                continue;
-            };
-            let other = projector.residual_part(&pool[cj][vj].columns);
-            if max_cosine(&chosen_perp, &other) > 0.99 && !alternatives.contains(&score.name) {
-                alternatives.push(score.name.clone());
-            }
-        }
-        let separated_by = separating_hint(&chosen, &alternatives, &pool);
-        let p_value = scored
-            .iter()
-            .find(|s| s.0 == ci)
-            .map(|s| s.2)
-            .unwrap_or(1.0);
-        findings.push(Finding {
-            name: chosen.name.clone(),
-            label: chosen.label.clone(),
-            meaning: chosen.meaning.clone(),
-            family: chosen.family.clone(),
-            estimates: Vec::new(),
-            p_value,
-            held_out_rms_before: cur_cv_rms,
-            held_out_rms_after: new_rms,
-            alternatives,
-            separated_by,
-            exposed_by: chosen.exposed_by.clone(),
-        });
-        steps.push(Step {
-            ranking,
-            added: Some(chosen.name.clone()),
-            variants_tested,
-        });
-        // A drift or a polynomial of the same cause is a different candidate; the chosen one's
-        // own alternatives (other degrees of the same slot) are retired with it. A periodic
-        // error stays open for another period: a ball screw shows its pitch and a longer wave
-        // of the screw, a rotary table its eccentricity and its worm-gear tooth error. The
-        // period already in the model is no longer separable, so the next one is another.
-        times_chosen[ci] += 1;
-        let recurs = matches!(chosen.family, Family::Periodic { .. })
-            && times_chosen[ci] < MAX_PERIODIC_COMPONENTS;
-        for (cj, variants) in pool.iter().enumerate() {
-            if variants[0].name == chosen.name {
-                used[cj] = true;
-            }
-        }
-        if recurs {
-            used[ci] = false;
-            let k = times_chosen[ci];
-            for t in &mut pool[ci] {
-                *t = nth_component(t.clone(), k);
-            }
-        }
-        model.terms.push(chosen);
-        scanned.push(ScannedTerm {
-            candidate: source[ci],
-            variant: vi,
-            component: times_chosen[ci] - 1,
-            finding: findings.len() - 1,
-        });
-        // Hyper-parameters found with the other effects still in the residuals are biased (an
-        // undersampled pitch leaks into the long periods of an irregular grid): refine each
-        // scanned term again with all the others fitted, so a biased period is corrected rather
-        // than patched by a spurious neighbour.
-        let changed = refit_scanned(&mut model, &scanned, &mut findings, candidates, obs, &w);
-        current_sol = solve(&model.design(n), &obs.values, &w);
-        current_cv = if changed {
-            folds.residuals(&model.design(n), &obs.values, &w)
-        } else {
-            cv
-        };
-    }
-
-    let x = model.design(n);
-    let extended = quality(
-        obs,
-        &current_sol.residuals,
-        &current_cv,
-        current_sol.rss_w,
-        n - current_sol.rank,
-    );
-    let cov = covariance(obs, &current_sol.cofactor, extended.sigma0);
-    let extended_parameters = parameters(&model.terms, &current_sol.coef, &cov);
-    let base_count = model.terms.len() - findings.len();
-    for (k, f) in findings.iter_mut().enumerate() {
-        f.estimates = extended_parameters[base_count + k].estimates.clone();
-    }
-    let _ = x;
     let residual_series = residual_series(
         obs,
         &findings,
-        &structure,
-        &base_cv,
-        &current_cv,
-        params.alpha,
+        &terms[base.len()..],
+        &sol,
+        base.iter().map(Term::width).sum(),
+        &remaining_structure,
     );
     Ok(Diagnosis {
         observations: n,
@@ -505,67 +426,600 @@ pub fn diagnose(
         setup_kind: obs.setup_kind.clone(),
         quantity: obs.quantity,
         stated_noise: obs.sigma.as_ref().map(rms),
+        verdict,
+        incomplete,
+        notes,
         base_parameters,
+        base_not_separable,
         base_rms_per_setup: group_rms(&base_sol.residuals, &obs.setup, obs.setup_names.len()),
         base_rms_per_channel: group_rms(&base_sol.residuals, &obs.channel, obs.channel_names.len()),
         base: base_quality,
         structure,
-        steps,
+        steps: search.steps,
         findings,
-        not_separable,
+        pruned: search.pruned,
+        not_separable: search.not_separable,
         extended,
         extended_parameters,
+        remaining_structure,
+        held_out,
         residual_series,
         alpha: params.alpha,
     })
 }
 
-/// An added term that came from a scanned candidate, so its hyper-parameter can be refined
-/// again once later terms are in the model.
-struct ScannedTerm {
-    candidate: usize,
+fn check_params(p: &DiagnoseParams) -> Result<()> {
+    let bad = |field: &str, detail: String| {
+        Err(DiagnoseError::InvalidData {
+            field: field.into(),
+            detail,
+        })
+    };
+    if !(p.alpha > 0.0 && p.alpha < 0.5) {
+        return bad(
+            "alpha",
+            format!("{}: expected a level in (0, 0.5)", p.alpha),
+        );
+    }
+    if p.folds < 2 || p.outer_folds == 1 {
+        return bad(
+            "folds",
+            format!(
+                "{} folds, {} outer folds: cross-validation needs at least 2 (0 outer folds skips them)",
+                p.folds, p.outer_folds
+            ),
+        );
+    }
+    if !(p.min_gain.is_finite() && (0.0..1.0).contains(&p.min_gain)) {
+        return bad("min_gain", format!("{}: expected [0, 1)", p.min_gain));
+    }
+    Ok(())
+}
+
+/// The candidates' variants on these observations, with the candidate each came from.
+/// Candidates named like a base term are the base's own: they are not searched.
+struct Pool {
+    variants: Vec<Vec<Term>>,
+    source: Vec<usize>,
+    /// Entry by the name of its first variant.
+    by_name: HashMap<String, usize>,
+}
+
+impl Pool {
+    fn new(obs: &Observations, candidates: &[Box<dyn Candidate>], base: &[Term]) -> Pool {
+        let n = obs.len();
+        let mut variants = Vec::new();
+        let mut source = Vec::new();
+        for (k, c) in candidates.iter().enumerate() {
+            let v: Vec<Term> = c
+                .variants(obs)
+                .into_iter()
+                .filter(|t| !t.is_invisible() && t.columns.nrows() == n)
+                .collect();
+            if v.is_empty() || base.iter().any(|b| b.name == v[0].name) {
+                continue;
+            }
+            variants.push(v);
+            source.push(k);
+        }
+        let by_name = variants
+            .iter()
+            .enumerate()
+            .map(|(k, v)| (v[0].name.clone(), k))
+            .collect();
+        Pool {
+            variants,
+            source,
+            by_name,
+        }
+    }
+}
+
+/// A term the search added, with where it came from.
+#[derive(Clone)]
+struct Chosen {
+    term: Term,
+    /// Pool entry and variant.
+    entry: usize,
     variant: usize,
     /// Which component of a recurring cause (0 = first).
     component: usize,
-    /// Its finding (and its place after the base terms in the model).
-    finding: usize,
+    p_value: f64,
+    variants_tested: usize,
+    cv_before: f64,
+    cv_after: f64,
+    alternatives: Vec<String>,
+    separated_by: Option<String>,
 }
 
-/// Refines the hyper-parameter of every scanned term with all other terms fitted; keeps a
-/// refinement only when it lowers the weighted residual sum of squares. Returns whether any
-/// term changed.
-fn refit_scanned(
-    model: &mut ModelState,
-    scanned: &[ScannedTerm],
-    findings: &mut [Finding],
-    candidates: &[Box<dyn Candidate>],
-    obs: &Observations,
-    w: &DVec,
-) -> bool {
-    let n = obs.len();
-    let base_count = model.terms.len() - findings.len();
-    let mut changed = false;
-    for s in scanned {
-        let j = base_count + s.finding;
-        let rss_with = |t: &Term| {
-            let mut terms: Vec<&Term> = model.terms.iter().collect();
-            terms[j] = t;
-            solve(&design(&terms, n), &obs.values, w).rss_w
-        };
-        let Some(refined) = candidates[s.candidate].refine(s.variant, &rss_with) else {
-            continue;
-        };
-        if rss_with(&refined) >= rss_with(&model.terms[j]) {
-            continue;
-        }
-        let refined = nth_component(refined, s.component);
-        let f = &mut findings[s.finding];
-        f.family = refined.family.clone();
-        f.meaning = refined.meaning.clone();
-        model.terms[j] = refined;
-        changed = true;
+struct SearchResult {
+    chosen: Vec<Chosen>,
+    steps: Vec<Step>,
+    not_separable: Vec<NotSeparable>,
+    pruned: Vec<String>,
+    hit_limit: bool,
+}
+
+/// The search over candidates, on the observations whose weight is not zero.
+struct Searcher<'a> {
+    obs: &'a Observations,
+    base: &'a [Term],
+    pool: &'a Pool,
+    candidates: &'a [Box<dyn Candidate>],
+    params: &'a DiagnoseParams,
+}
+
+/// A candidate's best variant in one step: (pool entry, variant, adjusted p, share of residual).
+type Scored = (usize, usize, f64, f64);
+
+impl Searcher<'_> {
+    fn candidate(&self, entry: usize) -> &dyn Candidate {
+        self.candidates[self.pool.source[entry]].as_ref()
     }
-    changed
+
+    /// Forward search, then backward pruning. Observations of weight zero take no part.
+    fn search(&self, w: &DVec, folds: &Folds) -> SearchResult {
+        let obs = self.obs;
+        let params = self.params;
+        let y = &obs.values;
+        let entries = self.pool.variants.len();
+        // Variants refined or renamed in this search (the pool itself is shared).
+        let mut overrides: HashMap<(usize, usize), Term> = HashMap::new();
+        let variant = |ov: &HashMap<(usize, usize), Term>, ci: usize, vi: usize| -> Term {
+            ov.get(&(ci, vi))
+                .cloned()
+                .unwrap_or_else(|| self.pool.variants[ci][vi].clone())
+        };
+        let mut used = vec![false; entries];
+        let mut times_chosen = vec![0usize; entries];
+        let mut chosen: Vec<Chosen> = Vec::new();
+        let mut steps = Vec::new();
+        let mut not_separable = Vec::new();
+        let mut hit_limit = false;
+        let model_terms = |chosen: &[Chosen]| -> Vec<Term> {
+            let mut t = self.base.to_vec();
+            t.extend(chosen.iter().map(|c| c.term.clone()));
+            t
+        };
+        let mut terms = model_terms(&chosen);
+        let mut x = design(&terms.iter().collect::<Vec<_>>(), obs.len());
+        let mut sol = solve(&x, y, w);
+        let mut cv_rms = folds.rms(&folds.residuals(&x, y, w));
+
+        loop {
+            let projector = Projector::new(&x, w);
+            let dof = sol.dof();
+            // A cause that builds on a term needs the term in the model: by name, or as a
+            // combination of model terms (an absolute location error when the relative ones
+            // are in the base).
+            let present = |name: &str| {
+                terms.iter().any(|t| t.name == name)
+                    || self.pool.by_name.get(name).is_some_and(|&k| {
+                        let c = &self.pool.variants[k][0].columns;
+                        projector.increment(c, &sol.residuals).separability < SEPARABILITY_TOLERANCE
+                    })
+            };
+            let eligible: Vec<usize> = (0..entries)
+                .filter(|&ci| !used[ci] && self.candidate(ci).requires().is_none_or(present))
+                .collect();
+            let variants_tested: usize = eligible
+                .iter()
+                .map(|&ci| self.pool.variants[ci].len())
+                .sum();
+            let mut scored: Vec<Scored> = Vec::new();
+            for &ci in &eligible {
+                let mut best: Option<(usize, Increment)> = None;
+                for vi in 0..self.pool.variants[ci].len() {
+                    let t = overrides
+                        .get(&(ci, vi))
+                        .unwrap_or(&self.pool.variants[ci][vi]);
+                    let inc = projector.increment(&t.columns, &sol.residuals);
+                    if inc.separability < SEPARABILITY_TOLERANCE || inc.new_rank < t.width() {
+                        continue;
+                    }
+                    if best
+                        .as_ref()
+                        .is_none_or(|(_, b)| inc.delta_rss > b.delta_rss)
+                    {
+                        best = Some((vi, inc));
+                    }
+                }
+                let Some((vi, mut inc)) = best else {
+                    if steps.is_empty() {
+                        record_not_separable(
+                            &mut not_separable,
+                            &self.pool.variants[ci][0],
+                            &terms,
+                            &x,
+                            w,
+                        );
+                    }
+                    continue;
+                };
+                let score = |t: &Term| {
+                    sol.rss_w - projector.increment(&t.columns, &sol.residuals).delta_rss
+                };
+                if let Some(refined) = self.candidate(ci).refine(vi, &score) {
+                    inc = projector.increment(&refined.columns, &sol.residuals);
+                    overrides.insert((ci, vi), nth_component(refined, times_chosen[ci]));
+                }
+                let k = inc.new_rank;
+                if dof <= k + 1 {
+                    continue;
+                }
+                let p = f_test(sol.rss_w, inc.delta_rss, k, dof) * variants_tested as f64;
+                scored.push((ci, vi, p.min(1.0), inc.delta_rss / sol.rss_w.max(1e-300)));
+            }
+            scored.sort_by(|a, b| a.2.total_cmp(&b.2).then(b.3.total_cmp(&a.3)));
+            let mut ranking = Vec::new();
+            let mut best: Option<(usize, usize, f64)> = None; // (entry, variant, cv rms)
+            for &(ci, vi, p, share) in scored.iter().take(params.shortlist) {
+                let t = variant(&overrides, ci, vi);
+                let mut cv = None;
+                if p < params.alpha {
+                    let r = folds.rms(&folds.residuals(&hcat(&x, &t.columns), y, w));
+                    cv = Some(r);
+                    let better = match best {
+                        None => true,
+                        Some((bc, bv, br)) => {
+                            let b_cost = complexity(&variant(&overrides, bc, bv));
+                            let t_cost = complexity(&t);
+                            // Parsimony: within 1 % of the best CV RMS the simpler cause wins.
+                            if (r - br).abs() <= 0.01 * br {
+                                t_cost < b_cost || (t_cost == b_cost && r < br)
+                            } else {
+                                r < br
+                            }
+                        }
+                    };
+                    if better {
+                        best = Some((ci, vi, r));
+                    }
+                }
+                ranking.push(CandidateScore {
+                    name: t.name.clone(),
+                    p_value: p,
+                    share_of_residual: share,
+                    cv_rms: cv,
+                });
+            }
+            let accepted = best.filter(|(_, _, r)| *r < cv_rms * (1.0 - params.min_gain));
+            let Some((ci, vi, new_cv)) = accepted else {
+                steps.push(Step {
+                    ranking,
+                    added: None,
+                    variants_tested,
+                });
+                break;
+            };
+            if chosen.len() == params.max_effects {
+                hit_limit = true;
+                steps.push(Step {
+                    ranking,
+                    added: None,
+                    variants_tested,
+                });
+                break;
+            }
+            let term = variant(&overrides, ci, vi);
+            // Alternatives: shortlisted candidates that explain the same residual direction about
+            // as well on held-out data (within 2 %).
+            let chosen_perp = projector.residual_part(&term.columns);
+            let mut alternatives = Vec::new();
+            for score in ranking.iter().filter(|c| c.name != term.name) {
+                let Some(r) = score.cv_rms else { continue };
+                if r > new_cv * 1.02 {
+                    continue;
+                }
+                let Some(&(cj, vj, _, _)) = scored
+                    .iter()
+                    .find(|s| variant(&overrides, s.0, s.1).name == score.name)
+                else {
+                    continue;
+                };
+                let other = projector.residual_part(&variant(&overrides, cj, vj).columns);
+                if max_cosine(&chosen_perp, &other) > 0.99 && !alternatives.contains(&score.name) {
+                    alternatives.push(score.name.clone());
+                }
+            }
+            let separated_by = separating_hint(&term, &alternatives, &self.pool.variants);
+            let p_value = scored.iter().find(|s| s.0 == ci).map_or(1.0, |s| s.2);
+            steps.push(Step {
+                ranking,
+                added: Some(term.name.clone()),
+                variants_tested,
+            });
+            // A drift or a polynomial of the same cause is a different candidate; the chosen
+            // one's own alternatives (other degrees of the same slot) are retired with it. A
+            // periodic error stays open for another period: a ball screw shows its pitch and a
+            // longer wave of the screw, a rotary table its eccentricity and its worm-gear tooth
+            // error. The period already in the model is no longer separable, so the next one is
+            // another.
+            times_chosen[ci] += 1;
+            let recurs = matches!(term.family, Family::Periodic { .. })
+                && times_chosen[ci] < MAX_PERIODIC_COMPONENTS;
+            for (cj, variants) in self.pool.variants.iter().enumerate() {
+                if variants[0].name == term.name {
+                    used[cj] = true;
+                }
+            }
+            if recurs {
+                used[ci] = false;
+                let k = times_chosen[ci];
+                for vj in 0..self.pool.variants[ci].len() {
+                    let t = variant(&overrides, ci, vj);
+                    overrides.insert((ci, vj), nth_component(t, k));
+                }
+            }
+            chosen.push(Chosen {
+                term,
+                entry: ci,
+                variant: vi,
+                component: times_chosen[ci] - 1,
+                p_value,
+                variants_tested,
+                cv_before: cv_rms,
+                cv_after: new_cv,
+                alternatives,
+                separated_by,
+            });
+            // Hyper-parameters found with the other effects still in the residuals are biased (an
+            // undersampled pitch leaks into the long periods of an irregular grid): refine each
+            // scanned term again with all the others fitted.
+            self.refit_scanned(&mut chosen, w);
+            terms = model_terms(&chosen);
+            x = design(&terms.iter().collect::<Vec<_>>(), obs.len());
+            sol = solve(&x, y, w);
+            cv_rms = folds.rms(&folds.residuals(&x, y, w));
+        }
+        let pruned = self.prune(&mut chosen, w, folds);
+        SearchResult {
+            chosen,
+            steps,
+            not_separable,
+            pruned,
+            hit_limit,
+        }
+    }
+
+    /// Refines the hyper-parameter of every chosen term with all other terms fitted; keeps a
+    /// refinement only when it lowers the weighted residual sum of squares.
+    fn refit_scanned(&self, chosen: &mut [Chosen], w: &DVec) {
+        let n = self.obs.len();
+        for j in 0..chosen.len() {
+            let rss_with = |t: &Term| {
+                let mut terms: Vec<&Term> = self.base.iter().collect();
+                terms.extend(chosen.iter().enumerate().map(
+                    |(k, c)| {
+                        if k == j { t } else { &c.term }
+                    },
+                ));
+                solve(&design(&terms, n), &self.obs.values, w).rss_w
+            };
+            let Some(refined) = self
+                .candidate(chosen[j].entry)
+                .refine(chosen[j].variant, &rss_with)
+            else {
+                continue;
+            };
+            if rss_with(&refined) >= rss_with(&chosen[j].term) {
+                continue;
+            }
+            chosen[j].term = nth_component(refined, chosen[j].component);
+        }
+    }
+
+    /// Backward pruning: every cause is re-tested in the complete model (F test of removing it,
+    /// Bonferroni-adjusted as when it entered, and its cross-validated gain); the weakest that
+    /// fails leaves, with the causes that build on it, until all pass. Returns the names removed.
+    fn prune(&self, chosen: &mut Vec<Chosen>, w: &DVec, folds: &Folds) -> Vec<String> {
+        let n = self.obs.len();
+        let y = &self.obs.values;
+        let mut pruned = Vec::new();
+        while !chosen.is_empty() {
+            let full = self.with(chosen, None);
+            let x = design(&full.iter().collect::<Vec<_>>(), n);
+            let sol = solve(&x, y, w);
+            let cv_full = folds.rms(&folds.residuals(&x, y, w));
+            let mut weakest: Option<(usize, f64, f64)> = None; // (index, p, cv ratio)
+            for j in 0..chosen.len() {
+                let reduced = self.with(chosen, Some(j));
+                let xr = design(&reduced.iter().collect::<Vec<_>>(), n);
+                let sr = solve(&xr, y, w);
+                let k = sol.rank.saturating_sub(sr.rank).max(1);
+                let p = (f_test(sr.rss_w, sr.rss_w - sol.rss_w, k, sol.dof())
+                    * chosen[j].variants_tested as f64)
+                    .min(1.0);
+                let ratio = folds.rms(&folds.residuals(&xr, y, w)) / cv_full.max(1e-300);
+                let fails = p >= self.params.alpha || ratio < 1.0 + 0.5 * self.params.min_gain;
+                if fails && weakest.is_none_or(|(_, bp, br)| p > bp || (p == bp && ratio < br)) {
+                    weakest = Some((j, p, ratio));
+                }
+            }
+            let Some((j, _, _)) = weakest else { break };
+            let name = chosen[j].term.name.clone();
+            pruned.push(name.clone());
+            chosen.remove(j);
+            // What builds on it goes with it.
+            chosen.retain(|c| {
+                let dependent = self.candidate(c.entry).requires() == Some(name.as_str());
+                if dependent {
+                    pruned.push(c.term.name.clone());
+                }
+                !dependent
+            });
+        }
+        pruned
+    }
+
+    /// Base terms and chosen terms, without the chosen term `skip` and those that build on it.
+    fn with(&self, chosen: &[Chosen], skip: Option<usize>) -> Vec<Term> {
+        let skipped = skip.map(|j| chosen[j].term.name.as_str());
+        let mut t = self.base.to_vec();
+        for (k, c) in chosen.iter().enumerate() {
+            if Some(k) == skip
+                || (skipped.is_some() && self.candidate(c.entry).requires() == skipped)
+            {
+                continue;
+            }
+            t.push(c.term.clone());
+        }
+        t
+    }
+
+    /// Adjusted p-value of removing each chosen term from the complete model (solution `sol`).
+    fn removal_p_values(&self, chosen: &[Chosen], w: &DVec, sol: &Solution) -> Vec<f64> {
+        (0..chosen.len())
+            .map(|j| {
+                let reduced = self.with(chosen, Some(j));
+                let sr = solve(
+                    &design(&reduced.iter().collect::<Vec<_>>(), self.obs.len()),
+                    &self.obs.values,
+                    w,
+                );
+                let k = sol.rank.saturating_sub(sr.rank).max(1);
+                (f_test(sr.rss_w, sr.rss_w - sol.rss_w, k, sol.dof())
+                    * chosen[j].variants_tested as f64)
+                    .min(1.0)
+            })
+            .collect()
+    }
+
+    /// The outer folds: for each, the base model and the whole search on the other folds
+    /// predict it. `None` when outer folds are off.
+    fn held_out(&self, w: &DVec) -> Option<HeldOut> {
+        let k = self.params.outer_folds;
+        if k < 2 {
+            return None;
+        }
+        let obs = self.obs;
+        let n = obs.len();
+        let outer = Folds::blocked(obs, &vec![true; n], k, self.params.blocks_per_fold);
+        let base_x = design(&self.base.iter().collect::<Vec<_>>(), n);
+        let runs: Vec<(Vec<(usize, f64, f64)>, Vec<String>)> = outer
+            .test
+            .par_iter()
+            .map(|test| {
+                let mut include = vec![true; n];
+                let mut w_train = w.clone();
+                for &i in test {
+                    include[i] = false;
+                    w_train[i] = 0.0;
+                }
+                let inner = Folds::blocked(
+                    obs,
+                    &include,
+                    self.params.folds,
+                    self.params.blocks_per_fold,
+                );
+                let found = self.search(&w_train, &inner);
+                let base = solve(&base_x, &obs.values, &w_train);
+                let terms = self.with(&found.chosen, None);
+                let diagnosed = solve(
+                    &design(&terms.iter().collect::<Vec<_>>(), n),
+                    &obs.values,
+                    &w_train,
+                );
+                let residuals = test
+                    .iter()
+                    .map(|&i| (i, base.residuals[i], diagnosed.residuals[i]))
+                    .collect();
+                let names = found.chosen.iter().map(|c| c.term.name.clone()).collect();
+                (residuals, names)
+            })
+            .collect();
+        let mut base = DVec::zeros(n);
+        let mut diagnosed = DVec::zeros(n);
+        let mut per_fold = Vec::new();
+        for (residuals, names) in runs {
+            for (i, b, d) in residuals {
+                base[i] = b;
+                diagnosed[i] = d;
+            }
+            per_fold.push(names);
+        }
+        Some(HeldOut {
+            folds: k,
+            base_rms: rms(&base),
+            base_max_abs: max_abs(&base),
+            diagnosed_rms: rms(&diagnosed),
+            diagnosed_max_abs: max_abs(&diagnosed),
+            per_fold,
+        })
+    }
+}
+
+/// Upper-tail probability of the F test that `delta_rss` (on `k` new directions) is noise, given
+/// the residual sum of squares `rss` before with `dof` degrees of freedom.
+fn f_test(rss: f64, delta_rss: f64, k: usize, dof: usize) -> f64 {
+    if dof <= k {
+        return 1.0;
+    }
+    let rss_new = (rss - delta_rss).max(1e-300);
+    let f = (delta_rss.max(0.0) / k as f64) / (rss_new / (dof - k) as f64);
+    stats::f_sf(f, k as f64, (dof - k) as f64)
+}
+
+/// The period or time constant of a term, with the quantity it is reported in.
+fn hyper_of(family: &Family) -> Option<(f64, Quantity)> {
+    match family {
+        Family::Periodic { period } => Some((*period, Quantity::Distance)),
+        Family::Drift {
+            time_constant_s: Some(tau),
+        } => Some((*tau, Quantity::Duration)),
+        _ => None,
+    }
+}
+
+/// Cofactor of the coefficients of the final model, widened by the uncertainty of the chosen
+/// terms' periods and time constants: the design is augmented by each hyper-parameter's
+/// derivative column (Gauss–Newton at the optimum), whose block of the inverse normal matrix
+/// then carries its variance. Returns the coefficients' cofactor and each chosen term's
+/// hyper-parameter cofactor standard deviation (`None` without one, or where the candidate
+/// cannot re-evaluate it; rotary harmonics are exact and have none).
+fn covariance_with_hyper(
+    searcher: &Searcher<'_>,
+    chosen: &[Chosen],
+    x: &DMat,
+    sol: &Solution,
+    w: &DVec,
+) -> (DMat, Vec<Option<f64>>) {
+    let p = x.ncols();
+    let offset = p - chosen.iter().map(|c| c.term.width()).sum::<usize>();
+    let mut extra: Vec<(usize, DVec)> = Vec::new();
+    let mut col = offset;
+    for (k, c) in chosen.iter().enumerate() {
+        let width = c.term.width();
+        if let Some((h, _)) = hyper_of(&c.term.family) {
+            let step = 1e-4 * h.abs().max(1e-12);
+            let cand = searcher.candidate(c.entry);
+            if let (Some(plus), Some(minus)) =
+                (cand.at(c.variant, h + step), cand.at(c.variant, h - step))
+            {
+                let coef = sol.coef.rows(col, width);
+                let d = (plus.columns - minus.columns) * coef / (2.0 * step);
+                extra.push((k, d));
+            }
+        }
+        col += width;
+    }
+    let mut hyper = vec![None; chosen.len()];
+    if extra.is_empty() {
+        return (sol.cofactor.clone(), hyper);
+    }
+    let mut aug = DMat::zeros(x.nrows(), p + extra.len());
+    aug.columns_mut(0, p).copy_from(x);
+    for (e, (_, d)) in extra.iter().enumerate() {
+        aug.column_mut(p + e).copy_from(d);
+    }
+    let aug_sol = solve(&aug, &sol.residuals, w);
+    for (e, (k, _)) in extra.iter().enumerate() {
+        let v = aug_sol.cofactor[(p + e, p + e)];
+        if v > 0.0 {
+            hyper[*k] = Some(v.sqrt());
+        }
+    }
+    (aug_sol.cofactor.view((0, 0), (p, p)).into_owned(), hyper)
 }
 
 /// Periodic components one slot may show (pitch, a longer wave of the screw, a harmonic).
@@ -630,68 +1084,104 @@ fn complexity(t: &Term) -> (usize, usize) {
     (t.width(), shape)
 }
 
-fn check_identifiable(base: &[Term], obs: &Observations, w: &DVec) -> Result<()> {
-    if base.is_empty() {
-        return Ok(());
-    }
-    let mut x = design(&base.iter().collect::<Vec<_>>(), obs.len());
-    for (i, wi) in w.iter().enumerate() {
-        x.row_mut(i).scale_mut(*wi);
-    }
-    for j in 0..x.ncols() {
-        let nrm = x.column(j).norm();
-        if nrm > 0.0 {
-            x.column_mut(j).scale_mut(1.0 / nrm);
+/// The base terms the data can separate: columns are kept in order while each adds a direction
+/// (whitened, at least [`SEPARABILITY_TOLERANCE`] of its norm outside the kept ones); a term that
+/// loses some columns keeps the others. The dropped ones are reported with what they are
+/// confounded with.
+fn separable_base(base: Vec<Term>, w: &DVec) -> (Vec<Term>, Vec<NotSeparable>) {
+    let mut basis: Vec<DVec> = Vec::new(); // orthonormal, whitened
+    let mut kept: Vec<Term> = Vec::new();
+    let mut dropped: Vec<(Term, usize)> = Vec::new(); // (term, column)
+    for t in base {
+        let mut keep = Vec::new();
+        for j in 0..t.width() {
+            let c = t.columns.column(j).component_mul(w);
+            let norm = c.norm();
+            if norm == 0.0 {
+                continue;
+            }
+            let mut r = c / norm;
+            for _ in 0..2 {
+                for q in &basis {
+                    let d = q.dot(&r);
+                    r.axpy(-d, q, 1.0);
+                }
+            }
+            let left = r.norm();
+            if left >= SEPARABILITY_TOLERANCE {
+                basis.push(r / left);
+                keep.push(j);
+            } else {
+                dropped.push((t.clone(), j));
+            }
+        }
+        if keep.len() == t.width() {
+            kept.push(t);
+        } else if !keep.is_empty() {
+            kept.push(Term {
+                columns: DMat::from_fn(t.columns.nrows(), keep.len(), |i, k| {
+                    t.columns[(i, keep[k])]
+                }),
+                coefficients: keep.iter().map(|&k| t.coefficients[k].clone()).collect(),
+                summary: Summary::EachCoefficient,
+                ..t
+            });
         }
     }
-    let names: Vec<String> = base
-        .iter()
-        .flat_map(|t| t.coefficients.iter().map(|c| c.0.clone()))
-        .collect();
-    let report = identifiability(
-        &x,
-        &names,
-        RankTolerance::Relative(crate::fit::RANK_TOLERANCE),
-    )
-    .map_err(|e| DiagnoseError::InvalidData {
-        field: "base model".into(),
-        detail: e.to_string(),
-    })?;
-    if report.is_identifiable() {
-        Ok(())
-    } else {
-        Err(DiagnoseError::NotIdentifiable {
-            combinations: report.combination_strings(),
+    let not_separable = dropped
+        .into_iter()
+        .map(|(t, j)| {
+            let x = design(&kept.iter().collect::<Vec<_>>(), t.columns.nrows());
+            let column = Term {
+                columns: t.columns.columns(j, 1).into_owned(),
+                ..t.clone()
+            };
+            let mut out = Vec::new();
+            record_not_separable(&mut out, &column, &kept, &x, w);
+            let mut ns = out.pop().unwrap_or(NotSeparable {
+                name: String::new(),
+                label: t.label.clone(),
+                confounded_with: Vec::new(),
+                separated_by: t.separated_by.clone(),
+            });
+            ns.name = t.coefficients[j].0.clone();
+            ns
         })
-    }
+        .collect();
+    (kept, not_separable)
 }
 
-fn quality(obs: &Observations, residuals: &DVec, cv: &DVec, rss_w: f64, dof: usize) -> FitQuality {
+fn quality(obs: &Observations, sol: &Solution, cv: &DVec) -> FitQuality {
+    let dof = sol.dof();
     let sigma0 = if dof > 0 {
-        (rss_w / dof as f64).sqrt()
+        (sol.rss_w / dof as f64).sqrt()
     } else {
         f64::NAN
     };
     FitQuality {
-        rms: rms(residuals),
-        max_abs: max_abs(residuals),
-        held_out_rms: rms(cv),
-        held_out_max_abs: max_abs(cv),
+        rms: rms(&sol.residuals),
+        max_abs: max_abs(&sol.residuals),
+        cv_rms: rms(cv),
+        cv_max_abs: max_abs(cv),
         sigma0,
         dof,
         chi2_p_value: obs
             .sigma
             .as_ref()
-            .map(|_| stats::chi2_sf(rss_w, dof as f64)),
+            .map(|_| stats::chi2_sf(sol.rss_w, dof as f64)),
     }
 }
 
-/// Covariance of the coefficients: the cofactor scaled by σ0² when no noise is stated, and by
-/// max(σ0², 1) when it is (a stated noise that the residuals exceed is not trusted blindly).
-fn covariance(obs: &Observations, cofactor: &DMat, sigma0: f64) -> DMat {
+/// Factor of the cofactor matrix: σ0² when no noise is stated, max(σ0², 1) when it is (a stated
+/// noise that the residuals exceed is not trusted blindly).
+fn covariance_scale(obs: &Observations, sigma0: f64) -> f64 {
     let s2 = sigma0 * sigma0;
-    let scale = if obs.sigma.is_some() { s2.max(1.0) } else { s2 };
-    cofactor * scale
+    if obs.sigma.is_some() { s2.max(1.0) } else { s2 }
+}
+
+/// Covariance of the coefficients (see [`covariance_scale`]).
+fn covariance(obs: &Observations, cofactor: &DMat, sigma0: f64) -> DMat {
+    cofactor * covariance_scale(obs, sigma0)
 }
 
 fn parameters(terms: &[Term], coef: &DVec, cov: &DMat) -> Vec<ParameterEstimate> {
@@ -716,6 +1206,9 @@ fn record_not_separable(out: &mut Vec<NotSeparable>, t: &Term, model: &[Term], x
         t.family,
         Family::Setup | Family::Drift { .. } | Family::Component { .. }
     ) {
+        return;
+    }
+    if x.ncols() == 0 {
         return;
     }
     // Which model terms the candidate is made of: regress it on the model's columns.
@@ -782,47 +1275,56 @@ fn group_rms(r: &DVec, group: &[usize], k: usize) -> Vec<f64> {
         .collect()
 }
 
+/// The evidence behind each finding: the final model's residuals with the finding's fitted
+/// effect added back, against the covariate that exposes it; and, for structure nothing
+/// explains, the final residuals against the covariate of the most significant test.
 fn residual_series(
     obs: &Observations,
     findings: &[Finding],
-    structure: &[StructureTest],
-    before: &DVec,
-    after: &DVec,
-    alpha: f64,
+    found_terms: &[Term],
+    sol: &Solution,
+    base_width: usize,
+    remaining: &[StructureTest],
 ) -> Vec<ResidualSeries> {
-    let mut names: Vec<String> = findings
-        .iter()
-        .filter_map(|f| f.exposed_by.clone())
-        .collect();
-    if names.is_empty() {
-        if let Some(s) = structure
-            .iter()
-            .filter(|s| s.is_significant(alpha))
-            .min_by(|a, b| a.p_value.total_cmp(&b.p_value))
-        {
-            names.push(s.variable.clone());
-        }
-    }
-    names.dedup();
-    let mut out = Vec::new();
-    for name in names {
-        let x: Vec<f64> = if name == "setup" {
-            obs.setup.iter().map(|&s| s as f64).collect()
-        } else if let Some(v) = obs.variable(&name) {
-            v.values.clone()
+    let covariate = |name: &str| -> Option<Vec<f64>> {
+        if name == "setup" {
+            Some(obs.setup.iter().map(|&s| s as f64).collect())
         } else {
+            obs.variable(name).map(|v| v.values.clone())
+        }
+    };
+    let mut out = Vec::new();
+    let mut col = base_width;
+    for (f, t) in findings.iter().zip(found_terms) {
+        let width = t.width();
+        let effect = &t.columns * sol.coef.rows(col, width);
+        col += width;
+        let Some(x) = f.exposed_by.as_deref().and_then(covariate) else {
             continue;
         };
-        if out.iter().any(|s: &ResidualSeries| s.variable == name) {
-            continue;
-        }
         out.push(ResidualSeries {
-            variable: name,
+            variable: f.exposed_by.clone().unwrap_or_default(),
+            finding: Some(f.name.clone()),
             x,
             channel: obs.channel.clone(),
-            before: before.as_slice().to_vec(),
-            after: after.as_slice().to_vec(),
+            residual: (&sol.residuals + &effect).as_slice().to_vec(),
+            effect: effect.as_slice().to_vec(),
         });
+    }
+    if let Some(s) = remaining
+        .iter()
+        .min_by(|a, b| a.p_value.total_cmp(&b.p_value))
+    {
+        if let Some(x) = covariate(&s.variable) {
+            out.push(ResidualSeries {
+                variable: s.variable.clone(),
+                finding: None,
+                x,
+                channel: obs.channel.clone(),
+                residual: sol.residuals.as_slice().to_vec(),
+                effect: vec![0.0; obs.len()],
+            });
+        }
     }
     out
 }

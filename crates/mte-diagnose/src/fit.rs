@@ -45,6 +45,15 @@ pub(crate) struct Solution {
     pub residuals: DVec,
     /// Weighted residual sum of squares.
     pub rss_w: f64,
+    /// Observations that took part (weight above zero).
+    pub observations: usize,
+}
+
+impl Solution {
+    /// Degrees of freedom of the residuals.
+    pub fn dof(&self) -> usize {
+        self.observations.saturating_sub(self.rank)
+    }
 }
 
 /// Solves `min ‖diag(w)(y − X b)‖` by QR of the column-normalised whitened design and an SVD of
@@ -52,6 +61,7 @@ pub(crate) struct Solution {
 /// minimum-norm solution).
 pub(crate) fn solve(x: &DMat, y: &DVec, w: &DVec) -> Solution {
     let (n, p) = x.shape();
+    let observations = w.iter().filter(|w| **w > 0.0).count();
     if p == 0 {
         let rss_w = y.iter().zip(w.iter()).map(|(r, w)| (r * w).powi(2)).sum();
         return Solution {
@@ -60,6 +70,7 @@ pub(crate) fn solve(x: &DMat, y: &DVec, w: &DVec) -> Solution {
             rank: 0,
             residuals: y.clone(),
             rss_w,
+            observations,
         };
     }
     let mut xw = x.clone();
@@ -113,6 +124,7 @@ pub(crate) fn solve(x: &DMat, y: &DVec, w: &DVec) -> Solution {
         rank,
         residuals,
         rss_w,
+        observations,
     }
 }
 
@@ -125,10 +137,9 @@ fn select(v: &DVec, rows: &[usize]) -> DVec {
     DVec::from_iterator(rows.len(), rows.iter().map(|&i| v[i]))
 }
 
-/// Blocked K-fold cross-validation: the acquisition order is cut into contiguous blocks and
-/// every K-th block is held out together, so a fold never sees the neighbours of its test
-/// points on either side of a block boundary within the block. Returns the out-of-fold
-/// prediction residuals (mm), one per observation.
+/// Blocked K-fold cross-validation: the acquisition order of the included observations is cut
+/// into contiguous blocks and every K-th block is held out together, so a fold never sees the
+/// neighbours of its test points on either side of a block boundary within the block.
 #[derive(Debug, Clone)]
 pub(crate) struct Folds {
     pub test: Vec<Vec<usize>>,
@@ -136,9 +147,19 @@ pub(crate) struct Folds {
 }
 
 impl Folds {
-    /// `k` folds of blocks of about `n / (k · blocks_per_fold)` observations.
-    pub fn blocked(obs: &Observations, k: usize, blocks_per_fold: usize) -> Folds {
-        let order = obs.acquisition_order();
+    /// `k` folds of blocks of about `n / (k · blocks_per_fold)` of the observations marked in
+    /// `include`; the others take part in no fold.
+    pub fn blocked(
+        obs: &Observations,
+        include: &[bool],
+        k: usize,
+        blocks_per_fold: usize,
+    ) -> Folds {
+        let order: Vec<usize> = obs
+            .acquisition_order()
+            .into_iter()
+            .filter(|&i| include[i])
+            .collect();
         let n = order.len();
         let n_blocks = (k * blocks_per_fold).min(n).max(k);
         let mut test = vec![Vec::new(); k];
@@ -149,15 +170,32 @@ impl Folds {
         let train = test
             .iter()
             .map(|t| {
-                let mut held = vec![false; n];
+                let mut held = vec![false; include.len()];
                 t.iter().for_each(|&i| held[i] = true);
-                (0..n).filter(|&i| !held[i]).collect()
+                (0..include.len())
+                    .filter(|&i| include[i] && !held[i])
+                    .collect()
             })
             .collect();
         Folds { test, train }
     }
 
-    /// Out-of-fold residuals of the model with design `x`.
+    /// RMS of out-of-fold residuals over the observations the folds hold out.
+    pub fn rms(&self, cv: &DVec) -> f64 {
+        let (sum, count) = self
+            .test
+            .iter()
+            .flatten()
+            .fold((0.0, 0usize), |(s, c), &i| (s + cv[i] * cv[i], c + 1));
+        if count == 0 {
+            0.0
+        } else {
+            (sum / count as f64).sqrt()
+        }
+    }
+
+    /// Out-of-fold prediction residuals (mm) of the model with design `x`, one per observation
+    /// (zero for observations in no fold).
     pub fn residuals(&self, x: &DMat, y: &DVec, w: &DVec) -> DVec {
         let mut out = DVec::zeros(y.len());
         for (train, test) in self.train.iter().zip(&self.test) {
@@ -227,6 +265,13 @@ impl Projector {
 
     /// How much the candidate `c` would reduce the weighted RSS of residuals `r`.
     pub fn increment(&self, c: &DMat, r: &DVec) -> Increment {
+        if c.ncols() == 0 {
+            return Increment {
+                delta_rss: 0.0,
+                new_rank: 0,
+                separability: 0.0,
+            };
+        }
         let mut cw = c.clone();
         for (i, wi) in self.w.iter().enumerate() {
             cw.row_mut(i).scale_mut(*wi);

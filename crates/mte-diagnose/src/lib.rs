@@ -11,10 +11,10 @@ pub mod report;
 pub mod structure;
 pub mod term;
 
-pub use candidate::{Alternatives, Candidate, SlotEffect, SlotRole, physical_effects};
+pub use candidate::{Alternatives, Candidate, Requires, SlotEffect, SlotRole, physical_effects};
 pub use data::{Observations, Variable, VariableKind};
 pub use dataset::{Manifest, Prepared, load, load_with_noise};
-pub use engine::{DiagnoseParams, Diagnosis, Finding, FitQuality, diagnose};
+pub use engine::{DiagnoseParams, Diagnosis, Finding, FitQuality, HeldOut, Verdict, diagnose};
 pub use structure::StructureTest;
 pub use term::{Estimate, Family, Quantity, Summary, Term};
 

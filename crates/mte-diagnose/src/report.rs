@@ -3,7 +3,7 @@
 
 use std::fmt::Write;
 
-use crate::engine::Diagnosis;
+use crate::engine::{Diagnosis, Verdict};
 use crate::term::{Quantity, significant_decimals};
 
 /// An RMS, maximum or noise level of the observations as engineers quote it: µm for lengths,
@@ -49,66 +49,137 @@ pub fn markdown(d: &Diagnosis, title: &str) -> String {
         if d.setups.len() == 1 { "" } else { "s" }
     );
     let _ = writeln!(s, "## Verdict\n");
-    if d.no_discrepancy() {
-        let _ = writeln!(
-            s,
-            "**No significant discrepancy.** The base model explains the data to the noise: held-out RMS {}, σ0 = {:.2}{}.\n",
-            level(d.quantity, d.base.held_out_rms),
-            d.base.sigma0,
-            d.base
-                .chi2_p_value
-                .map(|p| format!(" (χ² test {})", p_text(p)))
+    let noise_fit = |q: &crate::engine::FitQuality| {
+        format!(
+            "σ0 = {:.2}{}",
+            q.sigma0,
+            q.chi2_p_value
+                .map(|p| format!(", χ² test {}", p_text(p)))
                 .unwrap_or_default()
-        );
-    } else {
-        for f in &d.findings {
-            let est: Vec<String> = f
-                .estimates
-                .iter()
-                .map(|e| format!("{} = {}", e.name, e.text))
-                .collect();
-            let _ = writeln!(s, "- **{}** — {}: {}.", f.name, f.label, est.join(", "));
-            let _ = writeln!(s, "  {}.", f.meaning);
+        )
+    };
+    match d.verdict {
+        Verdict::NoDiscrepancy => {
             let _ = writeln!(
                 s,
-                "  Held-out RMS {} → {} ({}).",
-                level(d.quantity, f.held_out_rms_before),
-                level(d.quantity, f.held_out_rms_after),
-                p_text(f.p_value)
+                "**No significant discrepancy.** The base model explains the data to the noise: residual RMS {}, {}.\n",
+                level(d.quantity, d.base.rms),
+                noise_fit(&d.base)
             );
-            if !f.alternatives.is_empty() {
-                let _ = writeln!(
-                    s,
-                    "  Not separable with this data from: {}.{}",
-                    f.alternatives.join(", "),
-                    f.separated_by
-                        .as_ref()
-                        .map(|h| format!(" To separate them: {h}."))
-                        .unwrap_or_default()
-                );
-            }
         }
+        Verdict::Explained => {
+            let _ = writeln!(
+                s,
+                "**The base model misses {} cause{}**, named below; with {} the residuals are consistent with the noise ({}).\n",
+                d.findings.len(),
+                if d.findings.len() == 1 { "" } else { "s" },
+                if d.findings.len() == 1 { "it" } else { "them" },
+                noise_fit(&d.extended)
+            );
+        }
+        Verdict::Unexplained => {
+            let _ = writeln!(
+                s,
+                "**The model does not explain the data{}.** {}\n",
+                if d.findings.is_empty() {
+                    ", and nothing in the library of physical effects does"
+                } else {
+                    " even with the causes named below"
+                },
+                unexplained(d)
+            );
+        }
+    }
+    for f in &d.findings {
+        let est: Vec<String> = f
+            .estimates
+            .iter()
+            .map(|e| format!("{} = {}", e.name, e.text))
+            .collect();
+        let hyper = f
+            .hyper_parameter
+            .as_ref()
+            .map(|h| format!(" ({} {})", h.name, h.text))
+            .unwrap_or_default();
         let _ = writeln!(
             s,
-            "\n**Gain on data the fit did not see:** held-out RMS {} → {}, held-out maximum {} → {}.\n",
-            level(d.quantity, d.base.held_out_rms),
-            level(d.quantity, d.extended.held_out_rms),
-            level(d.quantity, d.base.held_out_max_abs),
-            level(d.quantity, d.extended.held_out_max_abs)
+            "- **{}** — {}: {}{hyper}.",
+            f.name,
+            f.label,
+            est.join(", ")
         );
-        if let Some(p) = d.extended.chi2_p_value {
-            let consistent = if p > 0.01 {
-                "consistent with"
-            } else {
-                "still above"
-            };
+        let _ = writeln!(s, "  {}.", f.meaning);
+        let _ = writeln!(
+            s,
+            "  Entered at {}; in the complete model {}; cross-validated RMS inside the search {} → {}.",
+            p_text(f.p_value),
+            p_text(f.p_value_final),
+            level(d.quantity, f.cv_rms_before),
+            level(d.quantity, f.cv_rms_after),
+        );
+        if !f.alternatives.is_empty() {
             let _ = writeln!(
                 s,
-                "Residuals of the extended model are {consistent} the stated noise (σ0 = {:.2}, χ² test {}).\n",
-                d.extended.sigma0,
-                p_text(p)
+                "  Not separable with this data from: {}.{}",
+                f.alternatives.join(", "),
+                f.separated_by
+                    .as_ref()
+                    .map(|h| format!(" To separate them: {h}."))
+                    .unwrap_or_default()
             );
         }
+    }
+    if !d.findings.is_empty() {
+        let _ = writeln!(s);
+    }
+    if let Some(h) = &d.held_out {
+        let _ = writeln!(
+            s,
+            "**Gain on data the search did not see** ({} folds of contiguous blocks; for each, the base model and the whole search — choice of causes, periods, time constants — on the other folds predict it): held-out RMS {} → {}, held-out maximum {} → {}.\n",
+            h.folds,
+            level(d.quantity, h.base_rms),
+            level(d.quantity, h.diagnosed_rms),
+            level(d.quantity, h.base_max_abs),
+            level(d.quantity, h.diagnosed_max_abs)
+        );
+        let differ = h.per_fold.iter().any(|names| {
+            let mut a = names.clone();
+            let mut b: Vec<String> = d.findings.iter().map(|f| f.name.clone()).collect();
+            a.sort();
+            b.sort();
+            a != b
+        });
+        if differ {
+            let folds: Vec<String> = h
+                .per_fold
+                .iter()
+                .map(|n| {
+                    if n.is_empty() {
+                        "nothing".to_string()
+                    } else {
+                        n.join(", ")
+                    }
+                })
+                .collect();
+            let _ = writeln!(
+                s,
+                "Not every fold's search named the same causes: {}.\n",
+                folds.join(" | ")
+            );
+        }
+    }
+    if let Some(why) = &d.incomplete {
+        let _ = writeln!(s, "**The diagnosis is incomplete:** {why}.\n");
+    }
+    for note in &d.notes {
+        let _ = writeln!(s, "Note: {note}.\n");
+    }
+    if !d.pruned.is_empty() {
+        let _ = writeln!(
+            s,
+            "Added during the search and removed when re-tested in the complete model: {}.\n",
+            d.pruned.join(", ")
+        );
     }
     let _ = writeln!(s, "## Base model\n");
     let _ = writeln!(s, "| quality | fit | held out |\n|---|---|---|");
@@ -116,13 +187,13 @@ pub fn markdown(d: &Diagnosis, title: &str) -> String {
         s,
         "| RMS | {} | {} |",
         level(d.quantity, d.base.rms),
-        level(d.quantity, d.base.held_out_rms)
+        level(d.quantity, d.base.cv_rms)
     );
     let _ = writeln!(
         s,
         "| max | {} | {} |\n",
         level(d.quantity, d.base.max_abs),
-        level(d.quantity, d.base.held_out_max_abs)
+        level(d.quantity, d.base.cv_max_abs)
     );
     let _ = writeln!(s, "| parameter | estimate ± u |\n|---|---|");
     for p in &d.base_parameters {
@@ -160,6 +231,22 @@ pub fn markdown(d: &Diagnosis, title: &str) -> String {
             p_text(t.p_value)
         );
     }
+    if !d.base_not_separable.is_empty() {
+        let _ = writeln!(s, "\n## Base parameters these data cannot separate\n");
+        for n in &d.base_not_separable {
+            let _ = writeln!(
+                s,
+                "- {} ({}) is a combination of {}: left out of the fit.{}",
+                n.name,
+                n.label,
+                n.confounded_with.join(", "),
+                n.separated_by
+                    .as_ref()
+                    .map(|h| format!(" Separate it with {h}."))
+                    .unwrap_or_default()
+            );
+        }
+    }
     if !d.not_separable.is_empty() {
         let _ = writeln!(s, "\n## Not separable with this data\n");
         for n in &d.not_separable {
@@ -187,8 +274,8 @@ pub fn markdown(d: &Diagnosis, title: &str) -> String {
                     "{} ({}{})",
                     c.name,
                     p_text(c.p_value),
-                    c.held_out_rms
-                        .map(|r| format!(", held out {}", level(d.quantity, r)))
+                    c.cv_rms
+                        .map(|r| format!(", cross-validated {}", level(d.quantity, r)))
                         .unwrap_or_default()
                 )
             })
@@ -210,6 +297,42 @@ pub fn markdown(d: &Diagnosis, title: &str) -> String {
         );
     }
     s
+}
+
+/// Where the unexplained structure is, in words.
+fn unexplained(d: &Diagnosis) -> String {
+    let mut parts = Vec::new();
+    let mut tests: Vec<_> = d.remaining_structure.iter().collect();
+    tests.sort_by(|a, b| a.p_value.total_cmp(&b.p_value));
+    for t in tests.iter().take(4) {
+        let period = t
+            .period
+            .map(|p| format!(", period {p:.3}"))
+            .unwrap_or_default();
+        parts.push(format!(
+            "the {} residuals still depend on {} ({}{period}; {:.0} % of the residual, {})",
+            t.channel,
+            t.variable,
+            t.test,
+            100.0 * t.share_of_residual,
+            p_text(t.p_value)
+        ));
+    }
+    let mut text = if parts.is_empty() {
+        String::new()
+    } else {
+        format!("Unexplained structure: {}. ", parts.join("; "))
+    };
+    if d.extended.chi2_p_value.is_some()
+        && d.extended.sigma0 > crate::engine::STATED_NOISE_TOLERANCE
+    {
+        text.push_str(&format!(
+            "The residuals are {:.1} times the stated noise (σ0, χ² test {}).",
+            d.extended.sigma0,
+            d.extended.chi2_p_value.map(p_text).unwrap_or_default()
+        ));
+    }
+    text.trim_end().to_string()
 }
 
 fn per(q: Quantity, names: &[String], values: &[f64]) -> String {

@@ -57,6 +57,10 @@ pub enum Quantity {
     Ratio,
     /// A ratio changing in time, 1/s, reported in ppm/min.
     RatioRate,
+    /// A distance along an axis in mm, reported in mm (a period).
+    Distance,
+    /// A duration in s, reported in s (a time constant).
+    Duration,
 }
 
 impl Quantity {
@@ -69,6 +73,8 @@ impl Quantity {
             Quantity::AngleRate => (1e6 * 60.0, "µrad/min"),
             Quantity::Ratio => (1e6, "ppm"),
             Quantity::RatioRate => (1e6 * 60.0, "ppm/min"),
+            Quantity::Distance => (1.0, "mm"),
+            Quantity::Duration => (1.0, "s"),
         }
     }
 

@@ -265,9 +265,9 @@ fn b_axis_squareness_to_y_is_found_with_two_ball_positions() {
         e.text
     );
     assert!(
-        d.extended.held_out_rms * 1e3 < 1.1 * NOISE_UM,
+        d.held_out.as_ref().unwrap().diagnosed_rms * 1e3 < 1.1 * NOISE_UM,
         "held-out RMS {}",
-        d.extended.held_out_rms
+        d.held_out.as_ref().unwrap().diagnosed_rms
     );
 }
 

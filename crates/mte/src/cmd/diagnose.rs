@@ -71,80 +71,97 @@ pub fn run(args: &Args) -> Result<(), CliError> {
     Ok(())
 }
 
-/// Held-out residuals before and after the extension against the covariate that exposed the
-/// cause, in µm (arcsec for angular observations).
+/// The evidence of one finding: the residuals of the final model with the finding left out,
+/// against the covariate that exposes it (rotary angles folded to one turn), with the fitted
+/// effect drawn over them; one panel per channel. For unexplained structure, the final residuals.
+/// In µm (arcsec for angular observations).
 fn residual_svg(d: &Diagnosis, index: usize) -> String {
     let s = &d.residual_series[index];
+    let rotary = s.variable.len() == 1 && "ABC".contains(s.variable.as_str());
     let (x_scale, x_unit) = match s.variable.as_str() {
         "t" => (1.0 / 60.0, "min"),
         "direction" | "setup" => (1.0, ""),
-        v if v.len() == 1 && "ABC".contains(v) => (180.0 / std::f64::consts::PI, "deg"),
+        _ if rotary => (180.0 / std::f64::consts::PI, "deg"),
         _ => (1.0, "mm"),
     };
-    let xs: Vec<f64> = s.x.iter().map(|x| x * x_scale).collect();
+    let xs: Vec<f64> =
+        s.x.iter()
+            .map(|x| {
+                let v = x * x_scale;
+                if rotary { v.rem_euclid(360.0) } else { v }
+            })
+            .collect();
     let (y_scale, y_desc) = match d.quantity {
         Quantity::Angle => (180.0 / std::f64::consts::PI * 3600.0, "residual (arcsec)"),
         _ => (1e3, "residual (µm)"),
     };
-    let before: Vec<f64> = s.before.iter().map(|v| v * y_scale).collect();
-    let after: Vec<f64> = s.after.iter().map(|v| v * y_scale).collect();
+    let residual: Vec<f64> = s.residual.iter().map(|v| v * y_scale).collect();
+    let effect: Vec<f64> = s.effect.iter().map(|v| v * y_scale).collect();
     let (x_lo, x_hi) = bounds(&xs);
     let (y_lo, y_hi) = bounds(
-        before
+        residual
             .iter()
-            .chain(after.iter())
+            .chain(effect.iter())
             .copied()
             .collect::<Vec<_>>()
             .as_slice(),
     );
+    let channels: Vec<usize> = (0..d.channels.len())
+        .filter(|c| s.channel.contains(c))
+        .collect();
     let mut svg = String::new();
     {
-        let root = SVGBackend::with_string(&mut svg, (900, 480)).into_drawing_area();
+        let height = 120 + 300 * channels.len() as u32;
+        let root = SVGBackend::with_string(&mut svg, (900, height)).into_drawing_area();
         let _ = root.fill(&WHITE);
-        let caption = format!(
-            "held-out residuals against {} before and after the extension",
-            s.variable
-        );
-        let chart = ChartBuilder::on(&root)
-            .caption(caption, ("sans-serif", 18))
-            .margin(12)
-            .x_label_area_size(40)
-            .y_label_area_size(60)
-            .build_cartesian_2d(x_lo..x_hi, y_lo..y_hi);
-        if let Ok(mut chart) = chart {
-            let x_desc = if x_unit.is_empty() {
-                s.variable.clone()
-            } else {
-                format!("{} ({x_unit})", s.variable)
+        let title = match &s.finding {
+            Some(name) => format!(
+                "{name}: residuals without it against {} (dots), fitted effect (dark)",
+                s.variable
+            ),
+            None => format!(
+                "unexplained structure: final residuals against {}",
+                s.variable
+            ),
+        };
+        let root = root
+            .titled(&title, ("sans-serif", 18))
+            .unwrap_or_else(|_| root.clone());
+        let panels = root.split_evenly((channels.len().max(1), 1));
+        for (panel, &ch) in panels.iter().zip(&channels) {
+            let chart = ChartBuilder::on(panel)
+                .caption(&d.channels[ch], ("sans-serif", 15))
+                .margin(10)
+                .x_label_area_size(40)
+                .y_label_area_size(60)
+                .build_cartesian_2d(x_lo..x_hi, y_lo..y_hi);
+            let Ok(mut chart) = chart else { continue };
+            let x_desc = match (x_unit.is_empty(), rotary) {
+                (true, _) => s.variable.clone(),
+                (false, true) => format!("{} ({x_unit}, one turn)", s.variable),
+                (false, false) => format!("{} ({x_unit})", s.variable),
             };
             let _ = chart.configure_mesh().x_desc(x_desc).y_desc(y_desc).draw();
-            let before_style = RGBColor(200, 60, 40).mix(0.6).filled();
-            let after_style = RGBColor(30, 90, 180).mix(0.8).filled();
-            let _ = chart
-                .draw_series(
-                    xs.iter()
-                        .zip(&before)
-                        .map(|(x, y)| Circle::new((*x, *y), 2, before_style)),
-                )
-                .map(|a| {
-                    a.label("base model")
-                        .legend(move |(x, y)| Circle::new((x, y), 3, before_style))
-                });
-            let _ = chart
-                .draw_series(
-                    xs.iter()
-                        .zip(&after)
-                        .map(|(x, y)| Circle::new((*x, *y), 2, after_style)),
-                )
-                .map(|a| {
-                    a.label("extended model")
-                        .legend(move |(x, y)| Circle::new((x, y), 3, after_style))
-                });
-            let _ = chart
-                .configure_series_labels()
-                .border_style(BLACK)
-                .background_style(WHITE.mix(0.8))
-                .draw();
+            let points = |values: &[f64]| -> Vec<(f64, f64)> {
+                (0..xs.len())
+                    .filter(|&i| s.channel[i] == ch)
+                    .map(|i| (xs[i], values[i]))
+                    .collect()
+            };
+            let residual_style = RGBColor(120, 140, 170).mix(0.5).filled();
+            let effect_style = RGBColor(200, 40, 20).filled();
+            let _ = chart.draw_series(
+                points(&residual)
+                    .into_iter()
+                    .map(|p| Circle::new(p, 2, residual_style)),
+            );
+            if s.finding.is_some() {
+                let _ = chart.draw_series(
+                    points(&effect)
+                        .into_iter()
+                        .map(|p| Circle::new(p, 1, effect_style)),
+                );
+            }
         }
         let _ = root.present();
     }
