@@ -537,31 +537,31 @@ pub(crate) fn prepare_rtest(manifest_path: &Path, noise_um: Option<f64>) -> Resu
             }
         }
     }
-    let base_names = default_rtest_base(&machine);
-    let mut candidate_effects = Vec::new();
-    for e in effects {
-        if base_names.contains(&e.name) {
-            let col = e
-                .reference
-                .as_ref()
-                .map(|(r, _)| &e.column + r)
-                .unwrap_or_else(|| e.column.clone());
-            base.push(
-                Term::single(
-                    e.name.clone(),
-                    e.label.clone(),
-                    e.meaning.clone(),
-                    Family::Base,
-                    col,
-                    e.quantity,
-                )
-                .separated_by_opt(e.separated_by.clone()),
-            );
-        } else {
-            candidate_effects.push(e);
-        }
-    }
-    let base = identifiable_subset(base, &observations);
+    // The base model: what the user states, by default the location errors of every rotary
+    // axis (position and orientation of its line) as IBS, KinematicsOpt and CYCLE996 identify
+    // them; the engine leaves out what the setups cannot separate, and says so.
+    let spec = crate::dataset::base_spec(
+        value.get("base_model"),
+        manifest_path,
+        crate::BaseModelSpec {
+            location: true,
+            ..Default::default()
+        },
+    )?;
+    base.extend(crate::dataset::spec_terms(
+        &spec,
+        &observations,
+        &effects,
+        &location_names(&machine),
+        manifest_path,
+    )?);
+    // A constant in the base is no candidate; its drift is (as one of the base's).
+    let candidate_effects: Vec<SlotEffect> = effects
+        .into_iter()
+        .filter(|e| {
+            !(matches!(e.role, SlotRole::Constant { .. }) && base.iter().any(|b| b.name == e.name))
+        })
+        .collect();
     let drifting: Vec<&Term> = base.iter().collect();
     let mut candidates = physical_effects(&observations, &candidate_effects, &drifting);
     candidates.extend(setup_candidates);
@@ -578,35 +578,21 @@ pub(crate) fn prepare_rtest(manifest_path: &Path, noise_um: Option<f64>) -> Resu
     })
 }
 
-/// The pivot model engineers fit first: the positions of each rotary axis line (the two
-/// location errors across the axis), as IBS's XOB/ZOB, XOC/YOC.
-fn default_rtest_base(machine: &Machine) -> Vec<String> {
+/// The location errors of every rotary axis (ISO 230-7) across its line: the position of the
+/// line in the two directions across the axis and its orientation about them (EX0B, EZ0B, EA0B,
+/// EC0B for a B axis along Y). Errors along and about the axis' own direction are a shift along
+/// the line and the angular zero, which these instruments see as setup errors.
+fn location_names(machine: &Machine) -> Vec<String> {
     let mut names = Vec::new();
     for axis in machine.axes().iter().filter(|a| a.kind == AxisKind::Rotary) {
         let own = (0..3).find(|&k| (axis.direction[k].abs() - 1.0).abs() < 1e-9);
-        for k in 0..3 {
-            if Some(k) != own {
+        for k in 0..6 {
+            if Some(k % 3) != own {
                 names.push(format!("E{}0{}", component_letter(k), axis.name));
             }
         }
     }
     names
-}
-
-/// Keeps the base terms in order while each adds a direction the data can see; the dropped
-/// ones are combinations of the kept ones (their effect is already in the model).
-fn identifiable_subset(base: Vec<Term>, obs: &Observations) -> Vec<Term> {
-    let w = crate::fit::whitening(obs);
-    let mut kept: Vec<Term> = Vec::new();
-    for t in base {
-        let x = crate::fit::design(&kept.iter().collect::<Vec<_>>(), obs.len());
-        let projector = crate::fit::Projector::new(&x, &w);
-        let inc = projector.increment(&t.columns, &obs.values);
-        if inc.separability >= crate::fit::SEPARABILITY_TOLERANCE && inc.new_rank == t.width() {
-            kept.push(t);
-        }
-    }
-    kept
 }
 
 /// Laser-tracker multilateration data (seed 004): interferometric lengths from several stations
@@ -846,6 +832,23 @@ fn prepare_tracker(
         column: DVec::from_fn(n, |k, _| (nominal[target_of[k]] - q[station_of[k]]).norm()),
         separated_by: Some("a calibrated reference length (scale bar) measured by the tracker, or the machine's own scale checked with a laser interferometer".into()),
         reference: None,
+    });
+    // The user's model of the machine (volumetric compensation: component errors as
+    // polynomials, squareness) on top of the stations; none by default.
+    let spec = crate::dataset::base_spec(
+        manifest.base_model.as_ref(),
+        manifest_path,
+        crate::BaseModelSpec::default(),
+    )?;
+    base.extend(crate::dataset::spec_terms(
+        &spec,
+        &observations,
+        &effects,
+        &[],
+        manifest_path,
+    )?);
+    effects.retain(|e| {
+        !(matches!(e.role, SlotRole::Constant { .. }) && base.iter().any(|b| b.name == e.name))
     });
     let candidates = physical_effects(&observations, &effects, &[]);
     let title = manifest

@@ -340,6 +340,187 @@ pub fn physical_effects(
     out
 }
 
+/// The base model a user states: which of the machine's ordinary errors the model already has,
+/// as a shorthand (`"base_model": {"components": {"degree": 3}, "squareness": true, "location": true}`
+/// in a dataset manifest) plus terms named one by one from the candidate library.
+#[derive(Debug, Clone, Default, PartialEq, serde::Deserialize, serde::Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct BaseModelSpec {
+    /// Every component error of every axis the data move: a Legendre polynomial in the axis
+    /// coordinate up to this degree over the observed range for a linear axis (from degree 2
+    /// for a straightness, whose linear part is the squareness), harmonics of a turn up to
+    /// ⌈degree / 2⌉ for a rotary axis (an error motion repeats every turn).
+    #[serde(default)]
+    pub components: Option<ComponentSpec>,
+    /// The squareness errors of every pair of linear axes.
+    #[serde(default)]
+    pub squareness: bool,
+    /// The location errors of every rotary axis: the position of its line across the axis and
+    /// its orientation (ISO 230-7), as far as the setups can separate them.
+    #[serde(default)]
+    pub location: bool,
+    /// Further terms by their library name (`EC0Y`, `EXX poly3`, `EXX reversal`).
+    #[serde(default)]
+    pub terms: Vec<String>,
+}
+
+/// The component errors of a [`BaseModelSpec`].
+#[derive(Debug, Clone, PartialEq, serde::Deserialize, serde::Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct ComponentSpec {
+    /// Polynomial degree (1–8).
+    pub degree: usize,
+}
+
+impl BaseModelSpec {
+    /// The spec of a manifest's `base_model` field: an object of this form, or (the older form)
+    /// a list of term names.
+    ///
+    /// # Errors
+    /// What is wrong, for the caller to wrap with the file and field.
+    pub fn from_json(value: &serde_json::Value) -> std::result::Result<Self, String> {
+        let spec: BaseModelSpec = match value {
+            serde_json::Value::Array(_) => BaseModelSpec {
+                terms: serde_json::from_value(value.clone()).map_err(|e| e.to_string())?,
+                ..BaseModelSpec::default()
+            },
+            _ => serde_json::from_value(value.clone()).map_err(|e| e.to_string())?,
+        };
+        if let Some(c) = &spec.components {
+            if !(1..=8).contains(&c.degree) {
+                return Err(format!(
+                    "`components.degree`: {}, expected 1 to 8",
+                    c.degree
+                ));
+            }
+        }
+        Ok(spec)
+    }
+
+    /// The base terms of the spec: component errors and squareness from the slot effects, the
+    /// location errors named in `location` (the rotary axes' errors the instrument can see), and
+    /// the named terms from `candidates` (each must have a single variant: a period or time
+    /// constant to choose is the search's job).
+    ///
+    /// # Errors
+    /// An unknown or scanned term name, with the closest names of the library.
+    pub fn terms(
+        &self,
+        obs: &Observations,
+        slots: &[SlotEffect],
+        location: &[String],
+        candidates: &[Box<dyn Candidate>],
+    ) -> std::result::Result<Vec<Term>, String> {
+        let mut out: Vec<Term> = Vec::new();
+        for slot in slots {
+            if slot.column.iter().all(|v| v.abs() < 1e-15) {
+                continue;
+            }
+            let constant = |family: Family| Term {
+                name: slot.name.clone(),
+                label: slot.label.clone(),
+                meaning: slot.meaning.clone(),
+                family,
+                columns: column_matrix(&slot.constant_column()),
+                coefficients: vec![(slot.name.clone(), slot.quantity)],
+                summary: Summary::EachCoefficient,
+                exposed_by: None,
+                separated_by: slot.separated_by.clone(),
+            };
+            match &slot.role {
+                SlotRole::Constant {
+                    family: Family::Squareness,
+                } if self.squareness => out.push(constant(Family::Base)),
+                SlotRole::Constant { .. } if self.location && location.contains(&slot.name) => {
+                    out.push(constant(Family::Base))
+                }
+                SlotRole::Component {
+                    axis, straightness, ..
+                } => {
+                    let Some(degree) = self.components.as_ref().map(|c| c.degree) else {
+                        continue;
+                    };
+                    let Some(v) = obs.variable(axis).filter(|v| varies(&v.values)) else {
+                        continue;
+                    };
+                    let (cols, what) = if v.kind == VariableKind::RotaryAxis {
+                        let harmonics = degree.div_ceil(2);
+                        let cols = slot.modulated(&v.values, &|s| {
+                            let mut m = DMat::zeros(s.len(), 2 * harmonics);
+                            for h in 1..=harmonics {
+                                let sc = sin_cos_columns(s, std::f64::consts::TAU / h as f64);
+                                m.columns_mut(2 * (h - 1), 2).copy_from(&sc);
+                            }
+                            m
+                        });
+                        (cols, format!("harmonics of a turn up to {harmonics}"))
+                    } else {
+                        let first = if *straightness { 2 } else { 1 };
+                        if first > degree {
+                            continue;
+                        }
+                        let cols =
+                            slot.modulated(&v.values, &|s| legendre_columns(s, first..=degree));
+                        (cols, format!("polynomial in {axis} up to degree {degree}"))
+                    };
+                    let name = format!("{} poly{degree}", slot.name);
+                    out.push(Term {
+                        coefficients: (0..cols.ncols())
+                            .map(|k| (format!("{name}[{k}]"), slot.quantity))
+                            .collect(),
+                        name,
+                        label: format!("{}, {what}", slot.label),
+                        meaning: slot.meaning.clone(),
+                        family: Family::Base,
+                        columns: cols,
+                        summary: Summary::EachCoefficient,
+                        exposed_by: Some(axis.clone()),
+                        separated_by: slot.separated_by.clone(),
+                    });
+                }
+                _ => {}
+            }
+        }
+        for name in &self.terms {
+            if out.iter().any(|t| &t.name == name) {
+                continue;
+            }
+            let found = candidates
+                .iter()
+                .map(|c| c.variants(obs))
+                .find(|v| v.first().is_some_and(|t| &t.name == name));
+            match found {
+                Some(v) if v.len() == 1 => {
+                    let mut t = v.into_iter().next().unwrap_or_else(|| unreachable!());
+                    t.family = Family::Base;
+                    out.push(t);
+                }
+                Some(_) => {
+                    return Err(format!(
+                        "`{name}` has a period or time constant to choose from the data: leave it to the search"
+                    ));
+                }
+                None => {
+                    let known: Vec<String> = candidates
+                        .iter()
+                        .filter_map(|c| c.variants(obs).into_iter().next().map(|t| t.name))
+                        .chain(location.iter().cloned())
+                        .collect();
+                    let close: Vec<String> = mte_linalg::text::closest(name, &known, 5)
+                        .into_iter()
+                        .map(|n| format!("`{n}`"))
+                        .collect();
+                    return Err(format!(
+                        "`{name}` is not an effect of this dataset; closest: {}",
+                        close.join(", ")
+                    ));
+                }
+            }
+        }
+        Ok(out)
+    }
+}
+
 /// One cause with a hyper-parameter scanned over a grid (a period, a time constant); the best
 /// grid value is refined by golden-section search between its neighbours.
 pub struct Scan {

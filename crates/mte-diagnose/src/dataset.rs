@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 use mte_linalg::{DMat, DVec};
 use serde::Deserialize;
 
-use crate::candidate::{Candidate, SlotEffect, SlotRole, physical_effects};
+use crate::candidate::{BaseModelSpec, Candidate, SlotEffect, SlotRole, physical_effects};
 use crate::data::{Observations, Variable, VariableKind};
 use crate::term::{Family, Quantity, Term};
 use crate::{DiagnoseError, Result};
@@ -39,9 +39,10 @@ pub struct Manifest {
     /// Setups (ball positions or tracker stations).
     #[serde(default)]
     pub setups: Vec<SetupSpec>,
-    /// Base model: names of the parameters the user believes in (defaults per kind).
+    /// The base model the user believes in: a [`crate::BaseModelSpec`] object, or a list of
+    /// term names; defaults per kind.
     #[serde(default)]
-    pub base_model: Option<Vec<String>>,
+    pub base_model: Option<serde_json::Value>,
     /// Tracker: the targets table (`id`, commanded axes `<axis>_mm` / `<axis>_deg`, optional `t_s`).
     #[serde(default)]
     pub targets: Option<String>,
@@ -316,7 +317,16 @@ fn prepare_axis(manifest: &Manifest, table: &Table, manifest_path: &Path) -> Res
         separated_by: None,
         reference: None,
     };
-    let mut candidates = physical_effects(&observations, std::slice::from_ref(&slot), &[&offset]);
+    let spec = base_spec(
+        manifest.base_model.as_ref(),
+        manifest_path,
+        BaseModelSpec::default(),
+    )?;
+    let slots = std::slice::from_ref(&slot);
+    let mut base = vec![offset];
+    base.extend(spec_terms(&spec, &observations, slots, &[], manifest_path)?);
+    let drifting: Vec<&Term> = base.iter().take(1).collect();
+    let mut candidates = physical_effects(&observations, slots, &drifting);
     if let Some(t) = observations.variable_of_kind(VariableKind::Time) {
         let t0 = t.values.iter().copied().fold(f64::INFINITY, f64::min);
         let col = DMat::from_fn(n, 1, |i, _| position[i] * (t.values[i] - t0));
@@ -338,8 +348,42 @@ fn prepare_axis(manifest: &Manifest, table: &Table, manifest_path: &Path) -> Res
         .unwrap_or_else(|| format!("{axis}-axis positioning runs"));
     Ok(Prepared {
         observations,
-        base: vec![offset],
+        base,
         candidates,
         title,
     })
+}
+
+/// The base-model spec of a manifest's `base_model` field, `default` without one.
+pub(crate) fn base_spec(
+    value: Option<&serde_json::Value>,
+    manifest_path: &Path,
+    default: BaseModelSpec,
+) -> Result<BaseModelSpec> {
+    value.map_or(Ok(default), |v| {
+        BaseModelSpec::from_json(v).map_err(|detail| DiagnoseError::Dataset {
+            path: manifest_path.display().to_string(),
+            detail: format!("field `base_model`: {detail}"),
+        })
+    })
+}
+
+/// The base terms of `spec` on these slots (named terms looked up in the slots' candidates).
+pub(crate) fn spec_terms(
+    spec: &BaseModelSpec,
+    obs: &Observations,
+    slots: &[SlotEffect],
+    location: &[String],
+    manifest_path: &Path,
+) -> Result<Vec<Term>> {
+    let named = if spec.terms.is_empty() {
+        Vec::new()
+    } else {
+        physical_effects(obs, slots, &[])
+    };
+    spec.terms(obs, slots, location, &named)
+        .map_err(|detail| DiagnoseError::Dataset {
+            path: manifest_path.display().to_string(),
+            detail: format!("field `base_model`: {detail}"),
+        })
 }

@@ -11,7 +11,10 @@ pub mod report;
 pub mod structure;
 pub mod term;
 
-pub use candidate::{Alternatives, Candidate, Requires, SlotEffect, SlotRole, physical_effects};
+pub use candidate::{
+    Alternatives, BaseModelSpec, Candidate, ComponentSpec, Requires, SlotEffect, SlotRole,
+    physical_effects,
+};
 pub use data::{Observations, Variable, VariableKind};
 pub use dataset::{Manifest, Prepared, load, load_with_noise};
 pub use engine::{DiagnoseParams, Diagnosis, Finding, FitQuality, HeldOut, Verdict, diagnose};

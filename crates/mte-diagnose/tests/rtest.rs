@@ -101,6 +101,22 @@ fn write_dataset(
     cycles: usize,
     seed: u64,
 ) -> PathBuf {
+    write_dataset_with_base(name, balls, errors, cycles, seed, Some(PIVOTS_ONLY))
+}
+
+/// A user whose model has the positions of the rotary axis lines only (the pivot model engineers
+/// fit first): the orientation errors are what the diagnosis may find.
+const PIVOTS_ONLY: &str = r#"{"terms": ["EX0B", "EZ0B", "EX0C", "EY0C"]}"#;
+
+/// As [`write_dataset`], with the manifest's `base_model` (`None`: the default base).
+fn write_dataset_with_base(
+    name: &str,
+    balls: &[Setup],
+    errors: &[Injected],
+    cycles: usize,
+    seed: u64,
+    base_model: Option<&str>,
+) -> PathBuf {
     let machine = Machine::library(MACHINE).unwrap();
     let n_slots = machine.n_slots();
     let dir =
@@ -190,8 +206,11 @@ fn write_dataset(
         }
     }
     std::fs::write(dir.join("rtest.csv"), csv).unwrap();
+    let base = base_model
+        .map(|b| format!(r#", "base_model": {b}"#))
+        .unwrap_or_default();
     let manifest = format!(
-        r#"{{"format": "mte-rtest/1", "machine": "{MACHINE}", "instrument": "R-test, simulated", "csv": "rtest.csv", "axes": ["X", "Y", "Z", "B", "C"], "setups": [{}]}}"#,
+        r#"{{"format": "mte-rtest/1", "machine": "{MACHINE}", "instrument": "R-test, simulated", "csv": "rtest.csv", "axes": ["X", "Y", "Z", "B", "C"], "setups": [{}]{base}}}"#,
         setups_json.join(", ")
     );
     let path = dir.join("manifest.json");
@@ -237,6 +256,33 @@ fn pivot_errors_only_yield_no_discovery() {
         .expect("EX0B in the base model");
     let e = &ex0b.estimates[0];
     assert!((e.value - 0.004).abs() <= 2.0 * e.uncertainty, "{}", e.text);
+}
+
+#[test]
+fn default_base_has_the_orientation_location_errors() {
+    // The B line tilted about X (a location error EA0B, ISO 230-7) is part of every machine's
+    // ordinary errors: the default base model (position and orientation of both rotary axis
+    // lines) explains it, names no cause, and estimates the tilt.
+    let alpha = 0.0031_f64.to_radians();
+    let mut errors = pivots();
+    errors.extend(b_tilt_about_x(alpha));
+    let d = run(&write_dataset_with_base(
+        "default-base",
+        &two_positions(),
+        &errors,
+        1,
+        25,
+        None,
+    ));
+    let report = mte_diagnose::report::markdown(&d, "default base");
+    assert!(d.no_discrepancy(), "{report}");
+    let ea0b = d
+        .base_parameters
+        .iter()
+        .find(|p| p.term == "EA0B")
+        .expect(&report);
+    let e = &ea0b.estimates[0];
+    assert!((e.value - alpha).abs() <= 2.0 * e.uncertainty, "{}", e.text);
 }
 
 #[test]

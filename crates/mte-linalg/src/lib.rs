@@ -10,6 +10,7 @@ pub use geometry::{
 };
 
 pub mod stats;
+pub mod text;
 
 pub mod csv;
 

@@ -54,6 +54,10 @@ pub struct Manifest {
     /// Optional: the programs run (free form, for the record).
     #[serde(default)]
     pub programs: Vec<serde_json::Value>,
+    /// Optional: the base model of a diagnosis of these data (`mte diagnose`; format in
+    /// `docs/formats-diagnose.md`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub base_model: Option<serde_json::Value>,
 }
 
 fn axis_unit(name: &str, rotary: bool) -> String {
@@ -249,6 +253,7 @@ pub fn dataset_to_strings(
             })
             .collect(),
         programs: vec![],
+        base_model: None,
     };
     let mut csv = String::from("setup,test,t_s");
     for a in &ds.axis_names {
