@@ -33,6 +33,9 @@ pub fn irregular_targets(rng: &mut impl Rng, stroke: f64, n: usize) -> Vec<f64> 
         .collect()
 }
 
+/// A hidden effect as a function of (x mm, direction ±1, t s), µm.
+type Part = Box<dyn Fn(f64, f64, f64) -> f64>;
+
 pub(crate) fn write(spec: &Spec, rng: &mut ChaCha8Rng, dir: &Path) -> std::io::Result<Truth> {
     let stroke = rng.random_range(500.0..=1000.0_f64).round();
     let n_targets = rng.random_range(15..=25);
@@ -67,7 +70,7 @@ pub(crate) fn write(spec: &Spec, rng: &mut ChaCha8Rng, dir: &Path) -> std::io::R
     }
     let mut reversal_um = ordinary_reversal_um;
     // Each hidden effect as a function of (x, direction, t) in µm.
-    let mut parts: Vec<Box<dyn Fn(f64, f64, f64) -> f64>> = Vec::new();
+    let mut parts: Vec<Part> = Vec::new();
     for h in &spec.hidden {
         match *h {
             Hidden::Pitch {

@@ -232,8 +232,8 @@ pub(crate) fn write(spec: &Spec, rng: &mut ChaCha8Rng, dir: &Path) -> std::io::R
         rng.random_range(100.0..=250.0_f64).round(),
     );
     let s = spec.ordinary_scale;
-    for k in 0..3 {
-        m.components[k] = LinearErrors::draw(rng, k, strokes[k].0, strokes[k].1, REALISTIC, s);
+    for (k, (lo, hi)) in strokes.iter().enumerate() {
+        m.components[k] = LinearErrors::draw(rng, k, *lo, *hi, REALISTIC, s);
     }
     for k in 0..3 {
         m.squareness[k] = signed(rng, 5.0, 60.0) * 1e-6 * s;
