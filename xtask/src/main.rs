@@ -1,7 +1,7 @@
 //! `cargo xtask reproduce [seed000|seed002|seed003|seed004|all] [--check]`,
 //! `cargo xtask reproduce seed003 --timing` (writes `docs/reproduction/seed003-timing.md`) and
 //! `cargo xtask bench [-- criterion args]` and
-//! `cargo xtask study [fdr|power|openworld|all] [--n N] [--n-power M] [--seed S] [--base-model omit] [--out FILE]`.
+//! `cargo xtask study [fdr|power|openworld|all] [--n N] [--n-power M] [--seed S] [--kind axis|tracker|rtest] [--base-model omit] [--out FILE]`.
 //!
 //! The generators are in the library target (`xtask::reproduce`), so the staleness test in
 //! `tests/reproduction_up_to_date.rs` runs the very same code.
@@ -9,7 +9,7 @@
 use std::process::{Command, ExitCode};
 use xtask::reproduce::{self, Freshness, PAPERS};
 
-const USAGE: &str = "usage: cargo xtask <reproduce [seed000|seed002|seed003|seed004|all] [--check] | reproduce seed003 --timing | bench [-- criterion args] | study [fdr|power|openworld|all] [--n N] [--n-power M] [--seed S] [--base-model omit] [--out FILE]>";
+const USAGE: &str = "usage: cargo xtask <reproduce [seed000|seed002|seed003|seed004|all] [--check] | reproduce seed003 --timing | bench [-- criterion args] | study [fdr|power|openworld|all] [--n N] [--n-power M] [--seed S] [--kind axis|tracker|rtest] [--base-model omit] [--out FILE]>";
 
 fn main() -> ExitCode {
     let args: Vec<String> = std::env::args().skip(1).collect();
@@ -96,37 +96,59 @@ fn run_study(args: &[String]) -> Result<(), String> {
     let (mut n, mut n_power, mut seed) = (200usize, 30usize, 1u64);
     let mut out: Option<String> = None;
     let mut base_model = BaseModel::Default;
-    let mut it = args.iter();
-    while let Some(a) = it.next() {
-        let mut value = |name: &str| {
-            it.next()
-                .cloned()
-                .ok_or_else(|| format!("{name} needs a value"))
-        };
-        match a.as_str() {
-            "--n" => n = value("--n")?.parse().map_err(|e| format!("--n: {e}"))?,
-            "--n-power" => {
-                n_power = value("--n-power")?
-                    .parse()
-                    .map_err(|e| format!("--n-power: {e}"))?
+    let mut kinds: Vec<Kind> = Kind::ALL.to_vec();
+    let mut recorded: Vec<String> = Vec::new();
+    let mut i = 0;
+    while i < args.len() {
+        let a = args[i].as_str();
+        if a.starts_with("--") {
+            let v = args
+                .get(i + 1)
+                .ok_or_else(|| format!("{a} needs a value"))?
+                .clone();
+            i += 2;
+            let bad = |e: std::num::ParseIntError| format!("{a}: {e}");
+            match a {
+                "--n" => n = v.parse().map_err(bad)?,
+                "--n-power" => n_power = v.parse().map_err(bad)?,
+                "--seed" => seed = v.parse().map_err(bad)?,
+                "--out" => {
+                    // not part of the recorded command: the page says where it goes
+                    out = Some(v);
+                    continue;
+                }
+                "--kind" => {
+                    kinds = match v.as_str() {
+                        "axis" => vec![Kind::Axis],
+                        "tracker" => vec![Kind::Tracker],
+                        "rtest" => vec![Kind::Rtest],
+                        other => return Err(format!("--kind: `{other}` (axis|tracker|rtest)")),
+                    }
+                }
+                "--base-model" => {
+                    base_model = match v.as_str() {
+                        "omit" => BaseModel::Omit,
+                        "default" => BaseModel::Default,
+                        other => return Err(format!("--base-model: `{other}` (omit|default)")),
+                    }
+                }
+                other => return Err(format!("unknown option `{other}`\n{USAGE}")),
             }
-            "--seed" => {
-                seed = value("--seed")?
-                    .parse()
-                    .map_err(|e| format!("--seed: {e}"))?
+            recorded.extend([a.to_string(), v]);
+        } else {
+            match a {
+                "fdr" | "power" | "openworld" | "all" => which = a.to_string(),
+                other => return Err(format!("unknown argument `{other}`\n{USAGE}")),
             }
-            "--out" => out = Some(value("--out")?),
-            "--base-model" => match value("--base-model")?.as_str() {
-                "omit" => base_model = BaseModel::Omit,
-                "default" => base_model = BaseModel::Default,
-                other => return Err(format!("--base-model: `{other}` (omit|default)")),
-            },
-            "fdr" | "power" | "openworld" | "all" => which = a.clone(),
-            other => return Err(format!("unknown argument `{other}`\n{USAGE}")),
+            recorded.push(a.to_string());
+            i += 1;
         }
     }
     let mut report = studies::StudyReport {
-        command: format!("cargo xtask study {}", args.join(" ")),
+        command: format!(
+            "cargo run --release -p xtask -- study {}",
+            recorded.join(" ")
+        ),
         base_seed: seed,
         ..Default::default()
     };
@@ -138,7 +160,10 @@ fn run_study(args: &[String]) -> Result<(), String> {
         }
     }
     if which == "power" || which == "all" {
-        for (kind, effect, sizes) in studies::power_plan() {
+        for (kind, effect, sizes) in studies::power_plan()
+            .into_iter()
+            .filter(|c| kinds.contains(&c.0))
+        {
             report.power.extend(studies::power_with(
                 kind,
                 effect,
@@ -150,7 +175,10 @@ fn run_study(args: &[String]) -> Result<(), String> {
         }
     }
     if which == "openworld" || which == "all" {
-        for (kind, effect, size) in studies::openworld_plan() {
+        for (kind, effect, size) in studies::openworld_plan()
+            .into_iter()
+            .filter(|c| kinds.contains(&c.0))
+        {
             report.openworld.push(studies::openworld_with(
                 kind,
                 effect,
