@@ -153,7 +153,7 @@ fn run_study(args: &[String]) -> Result<(), String> {
         ..Default::default()
     };
     if which == "fdr" || which == "all" {
-        for kind in Kind::ALL {
+        for &kind in &kinds {
             report
                 .fdr
                 .push(studies::fdr_with(kind, n, seed, &base_model));
