@@ -1,6 +1,7 @@
 //! `cargo xtask reproduce [seed000|seed002|seed003|seed004|all] [--check]`,
 //! `cargo xtask reproduce seed003 --timing` (writes `docs/reproduction/seed003-timing.md`) and
-//! `cargo xtask bench [-- criterion args]`.
+//! `cargo xtask bench [-- criterion args]` and
+//! `cargo xtask study [fdr|power|openworld|all] [--n N] [--n-power M] [--seed S] [--kind axis|tracker|rtest] [--base-model omit] [--out FILE]`.
 //!
 //! The generators are in the library target (`xtask::reproduce`), so the staleness test in
 //! `tests/reproduction_up_to_date.rs` runs the very same code.
@@ -8,13 +9,14 @@
 use std::process::{Command, ExitCode};
 use xtask::reproduce::{self, Freshness, PAPERS};
 
-const USAGE: &str = "usage: cargo xtask <reproduce [seed000|seed002|seed003|seed004|all] [--check] | reproduce seed003 --timing | bench [-- criterion args]>";
+const USAGE: &str = "usage: cargo xtask <reproduce [seed000|seed002|seed003|seed004|all] [--check] | reproduce seed003 --timing | bench [-- criterion args] | study [fdr|power|openworld|all] [--n N] [--n-power M] [--seed S] [--kind axis|tracker|rtest] [--base-model omit] [--out FILE]>";
 
 fn main() -> ExitCode {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let result = match args.first().map(String::as_str) {
         Some("reproduce") => run_reproduce(&args[1..]),
         Some("bench") => run_bench(&args[1..]),
+        Some("study") => run_study(&args[1..]),
         _ => Err(USAGE.to_string()),
     };
     match result {
@@ -82,6 +84,120 @@ fn run_reproduce(args: &[String]) -> Result<(), String> {
     } else {
         Err(format!("{} reproduction(s) failed", failures.len()))
     }
+}
+
+/// Runs the diagnosis studies on realistic datasets and prints (or writes, with `--out`) the
+/// Markdown page. `--n` datasets per kind for the false-discovery study (default 200),
+/// `--n-power` per cell for the power and open-world studies (default 30).
+fn run_study(args: &[String]) -> Result<(), String> {
+    use xtask::realistic::{BaseModel, Kind};
+    use xtask::studies;
+    let mut which = "all".to_string();
+    let (mut n, mut n_power, mut seed) = (200usize, 30usize, 1u64);
+    let mut out: Option<String> = None;
+    let mut base_model = BaseModel::Default;
+    let mut kinds: Vec<Kind> = Kind::ALL.to_vec();
+    let mut recorded: Vec<String> = Vec::new();
+    let mut i = 0;
+    while i < args.len() {
+        let a = args[i].as_str();
+        if a.starts_with("--") {
+            let v = args
+                .get(i + 1)
+                .ok_or_else(|| format!("{a} needs a value"))?
+                .clone();
+            i += 2;
+            let bad = |e: std::num::ParseIntError| format!("{a}: {e}");
+            match a {
+                "--n" => n = v.parse().map_err(bad)?,
+                "--n-power" => n_power = v.parse().map_err(bad)?,
+                "--seed" => seed = v.parse().map_err(bad)?,
+                "--out" => {
+                    // not part of the recorded command: the page says where it goes
+                    out = Some(v);
+                    continue;
+                }
+                "--kind" => {
+                    kinds = match v.as_str() {
+                        "axis" => vec![Kind::Axis],
+                        "tracker" => vec![Kind::Tracker],
+                        "rtest" => vec![Kind::Rtest],
+                        other => return Err(format!("--kind: `{other}` (axis|tracker|rtest)")),
+                    }
+                }
+                "--base-model" => {
+                    base_model = match v.as_str() {
+                        "omit" => BaseModel::Omit,
+                        "default" => BaseModel::Default,
+                        other => return Err(format!("--base-model: `{other}` (omit|default)")),
+                    }
+                }
+                other => return Err(format!("unknown option `{other}`\n{USAGE}")),
+            }
+            recorded.extend([a.to_string(), v]);
+        } else {
+            match a {
+                "fdr" | "power" | "openworld" | "all" => which = a.to_string(),
+                other => return Err(format!("unknown argument `{other}`\n{USAGE}")),
+            }
+            recorded.push(a.to_string());
+            i += 1;
+        }
+    }
+    let mut report = studies::StudyReport {
+        command: format!(
+            "cargo run --release -p xtask -- study {}",
+            recorded.join(" ")
+        ),
+        base_seed: seed,
+        ..Default::default()
+    };
+    if which == "fdr" || which == "all" {
+        for &kind in &kinds {
+            report
+                .fdr
+                .push(studies::fdr_with(kind, n, seed, &base_model));
+        }
+    }
+    if which == "power" || which == "all" {
+        for (kind, effect, sizes) in studies::power_plan()
+            .into_iter()
+            .filter(|c| kinds.contains(&c.0))
+        {
+            report.power.extend(studies::power_with(
+                kind,
+                effect,
+                &sizes,
+                n_power,
+                seed,
+                &base_model,
+            ));
+        }
+    }
+    if which == "openworld" || which == "all" {
+        for (kind, effect, size) in studies::openworld_plan()
+            .into_iter()
+            .filter(|c| kinds.contains(&c.0))
+        {
+            report.openworld.push(studies::openworld_with(
+                kind,
+                effect,
+                size,
+                n_power,
+                seed,
+                &base_model,
+            ));
+        }
+    }
+    let text = studies::render_markdown(&report);
+    match out {
+        Some(path) => {
+            std::fs::write(&path, &text).map_err(|e| format!("{path}: {e}"))?;
+            println!("wrote {path}");
+        }
+        None => print!("{text}"),
+    }
+    Ok(())
 }
 
 /// Runs every criterion bench of the workspace with short warm-up and measurement times and

@@ -1,0 +1,213 @@
+//! `axis` datasets: bidirectional ISO 230-2 style runs of the X axis measured with a laser
+//! interferometer. The reading is the deviation (measured − commanded, µm) at each target.
+
+use std::f64::consts::TAU;
+use std::fmt::Write as _;
+use std::path::Path;
+
+use rand::Rng;
+use rand_chacha::ChaCha8Rng;
+use rand_distr::{Distribution, Normal};
+
+use super::smooth::{Smooth, signed};
+use super::{EffectKind, Hidden, Kind, Spec, TrueEffect, Truth, sawtooth, unsupported};
+
+/// The stated noise a user writes: the true σ rounded to 0.1 µm (at least 0.1 µm).
+pub fn stated_noise_um(sigma_um: f64) -> f64 {
+    ((sigma_um * 10.0).round() / 10.0).max(0.1)
+}
+
+/// Irregularly spaced targets over `[0, stroke]`, ends included (ISO 230-2 asks for irregular
+/// spacing so that periodic errors are not sampled at one phase).
+pub fn irregular_targets(rng: &mut impl Rng, stroke: f64, n: usize) -> Vec<f64> {
+    let step = stroke / (n - 1) as f64;
+    (0..n)
+        .map(|i| {
+            if i == 0 || i == n - 1 {
+                i as f64 * step
+            } else {
+                i as f64 * step + rng.random_range(-0.35..0.35) * step
+            }
+        })
+        .map(|x: f64| (x * 1000.0).round() / 1000.0)
+        .collect()
+}
+
+/// A hidden effect as a function of (x mm, direction ±1, t s), µm.
+type Part = Box<dyn Fn(f64, f64, f64) -> f64>;
+
+pub(crate) fn write(spec: &Spec, rng: &mut ChaCha8Rng, dir: &Path) -> std::io::Result<Truth> {
+    let stroke = rng.random_range(500.0..=1000.0_f64).round();
+    let n_targets = rng.random_range(15..=25);
+    let targets = irregular_targets(rng, stroke, n_targets);
+    let runs = rng.random_range(3..=5);
+    let sigma = rng.random_range(0.1..=0.6) * spec.noise_scale;
+    let s = spec.ordinary_scale;
+    let pos_size = rng.random_range(3.0..=20.0) * s;
+    let positioning = Smooth::draw(rng, 0.0, stroke, pos_size);
+    let zero_um = signed(rng, 0.0, 5.0) * s;
+    let ordinary_reversal_um = if spec.ordinary_reversal {
+        signed(rng, 0.5, 3.0) * s
+    } else {
+        0.0
+    };
+    let dt = rng.random_range(3.0..=6.0_f64);
+    let pause = rng.random_range(10.0..=60.0_f64);
+    let phase = rng.random_range(0.0..TAU);
+
+    let mut effects = Vec::new();
+    let mut ordinary = Vec::new();
+    if spec.ordinary_reversal {
+        ordinary.push(TrueEffect {
+            iso_name_hint: "reversal".into(),
+            kind: EffectKind::Reversal,
+            size: ordinary_reversal_um,
+            unit: "um",
+            value: ordinary_reversal_um * 1e-3,
+            signed: true,
+            detail: "ordinary reversal".into(),
+        });
+    }
+    let mut reversal_um = ordinary_reversal_um;
+    // Each hidden effect as a function of (x, direction, t) in µm.
+    let mut parts: Vec<Part> = Vec::new();
+    for h in &spec.hidden {
+        match *h {
+            Hidden::Pitch {
+                axis: 0,
+                amplitude_um,
+                period_mm,
+            } => {
+                parts.push(Box::new(move |x, _, _| {
+                    amplitude_um * (TAU * x / period_mm + phase).sin()
+                }));
+                effects.push(TrueEffect {
+                    iso_name_hint: "EXX".into(),
+                    kind: EffectKind::Periodic,
+                    size: amplitude_um,
+                    unit: "um",
+                    value: amplitude_um.abs() * 1e-3,
+                    signed: false,
+                    detail: format!("period {period_mm:.2} mm"),
+                });
+            }
+            Hidden::Reversal { um } => {
+                reversal_um += um;
+                effects.push(TrueEffect {
+                    iso_name_hint: "reversal".into(),
+                    kind: EffectKind::Reversal,
+                    size: um,
+                    unit: "um",
+                    value: 0.0, // set below: the total
+                    signed: true,
+                    detail: String::new(),
+                });
+            }
+            Hidden::ZeroDrift { um_per_min } => {
+                parts.push(Box::new(move |_, _, t| um_per_min * t / 60.0));
+                effects.push(TrueEffect {
+                    iso_name_hint: "drift".into(),
+                    kind: EffectKind::Drift,
+                    size: um_per_min,
+                    unit: "um/min",
+                    value: um_per_min * 1e-3 / 60.0,
+                    signed: true,
+                    detail: "linear drift of the zero".into(),
+                });
+            }
+            Hidden::Sawtooth {
+                axis: 0,
+                amplitude_um,
+                period_mm,
+            } => {
+                let off = phase / TAU;
+                parts.push(Box::new(move |x, _, _| {
+                    amplitude_um * sawtooth(x / period_mm + off)
+                }));
+                effects.push(TrueEffect {
+                    iso_name_hint: "EXX".into(),
+                    kind: EffectKind::OpenWorld,
+                    size: amplitude_um,
+                    unit: "um",
+                    value: amplitude_um.abs() * 1e-3,
+                    signed: false,
+                    detail: format!("sawtooth, period {period_mm:.2} mm"),
+                });
+            }
+            Hidden::RiseFall { um, tau_s } => {
+                parts.push(Box::new(move |_, _, t| {
+                    um * (t / tau_s) * (1.0 - t / tau_s).exp()
+                }));
+                effects.push(TrueEffect {
+                    iso_name_hint: "drift".into(),
+                    kind: EffectKind::OpenWorld,
+                    size: um,
+                    unit: "um",
+                    value: um * 1e-3,
+                    signed: true,
+                    detail: format!("rise and fall of the zero, peak at {tau_s:.0} s"),
+                });
+            }
+            _ => return Err(unsupported(Kind::Axis, h)),
+        }
+    }
+    for e in &mut effects {
+        if e.kind == EffectKind::Reversal {
+            e.value = reversal_um * 1e-3;
+        }
+    }
+
+    let noise = Normal::new(0.0, sigma.max(1e-300)).expect("finite σ");
+    let mut csv = String::from("run,direction,x_mm,t_s,deviation_um\n");
+    let mut t = 0.0;
+    let mut n_obs = 0;
+    for run in 1..=runs {
+        for sign in [1.0, -1.0] {
+            let order: Vec<f64> = if sign > 0.0 {
+                targets.clone()
+            } else {
+                targets.iter().rev().copied().collect()
+            };
+            for x in order {
+                let mut dev = zero_um + positioning.at(x) + 0.5 * reversal_um * sign;
+                for p in &parts {
+                    dev += p(x, sign, t);
+                }
+                if sigma > 0.0 {
+                    dev += noise.sample(rng);
+                }
+                let _ = writeln!(
+                    csv,
+                    "{run},{},{x:.3},{t:.1},{dev:.4}",
+                    if sign > 0.0 { "+" } else { "-" }
+                );
+                n_obs += 1;
+                t += dt;
+            }
+            t += pause;
+        }
+    }
+    std::fs::write(dir.join("runs.csv"), csv)?;
+    let mut manifest = serde_json::json!({
+        "format": "mte-dataset/1",
+        "kind": "axis",
+        "description": "X-axis bidirectional positioning runs (laser interferometer)",
+        "axis": "X",
+        "noise_um": stated_noise_um(sigma.max(0.05)),
+        "data": "runs.csv",
+    });
+    if let Some(b) = spec.base_model.resolve(Kind::Axis) {
+        manifest["base_model"] = b;
+    }
+    let path = dir.join("manifest.json");
+    std::fs::write(&path, serde_json::to_string_pretty(&manifest)?)?;
+    Ok(Truth {
+        kind: Kind::Axis,
+        manifest: path,
+        effects,
+        ordinary,
+        noise_um: sigma,
+        stations: Vec::new(),
+        n_observations: n_obs,
+    })
+}

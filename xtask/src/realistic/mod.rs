@@ -1,0 +1,320 @@
+//! Generators of realistic machines and their measurement datasets, for studying the
+//! model-discrepancy diagnosis (`mte-diagnose`) from the outside.
+//!
+//! A real machine carries all its ordinary errors at once. Each generator draws, from a seed, a
+//! machine with every ordinary error at a random realistic size, as a random smooth function of
+//! its axis coordinate ([`smooth`]), adds the [`Hidden`] effects asked for, simulates the
+//! measurement with its own homogeneous transforms (written out per machine type here, sharing
+//! no code with `mte-kinematics`, `mte-rtest` or `mte-diagnose`) and writes the files the
+//! diagnosis reads. The truth is returned in memory only ([`Truth`]): nothing about the hidden
+//! effects reaches the files (manifest text, file names and directory names are the same for
+//! every dataset of a kind).
+//!
+//! ```no_run
+//! use xtask::realistic::{Hidden, Kind, write};
+//! let dir = std::env::temp_dir().join("ds0");
+//! let truth = write(Kind::Axis, &[Hidden::Pitch { axis: 0, amplitude_um: 1.5, period_mm: 20.0 }], 7, &dir)?;
+//! println!("{:?}", truth.effects);
+//! # Ok::<(), std::io::Error>(())
+//! ```
+
+pub mod axis;
+pub mod geom;
+pub mod rtest;
+pub mod smooth;
+pub mod tracker;
+
+use std::path::{Path, PathBuf};
+
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+
+/// The kind of dataset (instrument and machine type).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum Kind {
+    /// Bidirectional ISO 230-2 runs of the X axis with a laser interferometer (`mte-dataset/1`,
+    /// `"kind": "axis"`).
+    Axis,
+    /// Laser-tracker multilateration of a three-axis machine (`mte-dataset/1`,
+    /// `"kind": "tracker"`), machine file written beside the manifest.
+    Tracker,
+    /// ISO 10791-6 R-test of a B/C trunnion (table–table) five-axis machine (`mte-rtest/1`).
+    Rtest,
+}
+
+impl Kind {
+    /// All kinds.
+    pub const ALL: [Kind; 3] = [Kind::Axis, Kind::Tracker, Kind::Rtest];
+
+    /// Lower-case name (`axis`, `tracker`, `rtest`).
+    pub fn name(self) -> &'static str {
+        match self {
+            Kind::Axis => "axis",
+            Kind::Tracker => "tracker",
+            Kind::Rtest => "rtest",
+        }
+    }
+}
+
+/// A hidden effect put on top of the ordinary errors. Linear axes are numbered 0 = X, 1 = Y,
+/// 2 = Z; rotary axes 0 = B, 1 = C (R-test machine). Sizes are signed where a sign makes sense.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Hidden {
+    /// Periodic pitch error of a linear axis' positioning (ball screw): amplitude µm, period mm
+    /// (axis, tracker).
+    Pitch {
+        /// Linear axis 0..3.
+        axis: usize,
+        /// Amplitude, µm.
+        amplitude_um: f64,
+        /// Period, mm.
+        period_mm: f64,
+    },
+    /// Squareness between two linear axes beyond the ordinary one, µrad (tracker, rtest).
+    /// `pair`: 0 = EC0Y (Y to X), 1 = EA0Z (Z to Y), 2 = EB0Z (Z to X).
+    Squareness {
+        /// Which squareness.
+        pair: usize,
+        /// Extra angle, µrad.
+        urad: f64,
+    },
+    /// Reversal (backlash): the `-` runs sit `um` below the `+` runs (axis).
+    Reversal {
+        /// Difference between the directions, µm.
+        um: f64,
+    },
+    /// Scale error of every tracker length, ppm (tracker).
+    TrackerScale {
+        /// ppm.
+        ppm: f64,
+    },
+    /// First-order thermal drift of a rotary axis line's X position over repeated cycles
+    /// (EX0B for `rotary = 0`, EX0C for 1): `um · (1 − exp(−t/τ))` (rtest).
+    PivotDrift {
+        /// Rotary axis 0 = B, 1 = C.
+        rotary: usize,
+        /// Final drift, µm.
+        um: f64,
+        /// Time constant, s.
+        tau_s: f64,
+    },
+    /// Linear drift of the zero in time, µm/min (axis).
+    ZeroDrift {
+        /// Rate, µm/min.
+        um_per_min: f64,
+    },
+    /// Angular positioning error of a rotary axis as a harmonic of a turn:
+    /// `urad · sin(k·θ + φ)` (rtest; `rotary` 1 = C).
+    AngularPositioning {
+        /// Rotary axis 0 = B, 1 = C.
+        rotary: usize,
+        /// Harmonic (cycles per turn).
+        harmonic: u32,
+        /// Amplitude, µrad.
+        urad: f64,
+    },
+    /// Orientation of the B axis line about X (EA0B) beyond the ordinary one, µrad (rtest).
+    BTilt {
+        /// µrad.
+        urad: f64,
+    },
+    /// Open world: sawtooth positioning error of a linear axis (a slipping scale, a stepped
+    /// compensation table), amplitude µm (peak), period mm (axis, tracker).
+    Sawtooth {
+        /// Linear axis 0..3.
+        axis: usize,
+        /// Peak amplitude, µm.
+        amplitude_um: f64,
+        /// Period, mm.
+        period_mm: f64,
+    },
+    /// Open world: a drift that rises and falls, `um · (t/τ)·exp(1 − t/τ)` (peak `um` at t = τ):
+    /// the zero of the axis (axis) or EX0B (rtest).
+    RiseFall {
+        /// Peak, µm.
+        um: f64,
+        /// Time of the peak, s.
+        tau_s: f64,
+    },
+    /// Open world: X straightness (tip deviation in Y) whose size grows with Z: a smooth shape
+    /// of x with peak `um` at the bottom of the Z stroke and zero at its top (tracker).
+    TwoAxis {
+        /// Peak, µm.
+        um: f64,
+    },
+}
+
+impl Hidden {
+    /// Whether no candidate of the diagnosis's library has this shape exactly.
+    pub fn is_open_world(&self) -> bool {
+        matches!(
+            self,
+            Hidden::Sawtooth { .. } | Hidden::RiseFall { .. } | Hidden::TwoAxis { .. }
+        )
+    }
+}
+
+/// What a true effect is, for matching a finding to it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum EffectKind {
+    /// Periodic error along an axis.
+    Periodic,
+    /// Squareness between linear axes.
+    Squareness,
+    /// Reversal.
+    Reversal,
+    /// Instrument scale.
+    InstrumentScale,
+    /// Drift in time (linear or first order).
+    Drift,
+    /// Angular positioning error of a rotary axis.
+    AngularPositioning,
+    /// Location (position or orientation) error of a rotary axis line.
+    Location,
+    /// An effect no candidate has exactly.
+    OpenWorld,
+}
+
+/// One true effect.
+#[derive(Debug, Clone, PartialEq)]
+pub struct TrueEffect {
+    /// The ISO-like name the diagnosis would give it (`EXX`, `EC0Y`, `EA0B`, `EX0B`, `ECC`,
+    /// `reversal`, `tracker scale`, `X zero`, …).
+    pub iso_name_hint: String,
+    /// What it is.
+    pub kind: EffectKind,
+    /// Its size in `unit`.
+    pub size: f64,
+    /// `um`, `urad`, `ppm`, `um/min`.
+    pub unit: &'static str,
+    /// The value the diagnosis should estimate, in its internal units (mm, rad, ratio, mm/s):
+    /// the total of the machine's parameter (ordinary + hidden) where the two add.
+    pub value: f64,
+    /// Whether the sign of `value` is defined the diagnosis's way; `false` (periodic amplitudes,
+    /// squareness sign conventions) means compare magnitudes.
+    pub signed: bool,
+    /// Free text (period, time constant …).
+    pub detail: String,
+}
+
+/// What the generator put into a dataset (kept in memory, never written).
+#[derive(Debug, Clone)]
+pub struct Truth {
+    /// The kind of dataset.
+    pub kind: Kind,
+    /// The manifest to load.
+    pub manifest: PathBuf,
+    /// The hidden effects.
+    pub effects: Vec<TrueEffect>,
+    /// The ordinary constant parameters (location and squareness errors), for reference.
+    pub ordinary: Vec<TrueEffect>,
+    /// Standard deviation of the noise, µm.
+    pub noise_um: f64,
+    /// Tracker: true station positions (workpiece frame, mm) and dead paths (mm).
+    pub stations: Vec<([f64; 3], f64)>,
+    /// Number of observations written.
+    pub n_observations: usize,
+}
+
+/// The base model written in the manifest.
+#[derive(Debug, Clone, PartialEq)]
+pub enum BaseModel {
+    /// The kind's default: omitted for axis and R-test, [`BaseModel::standard`] for tracker.
+    Default,
+    /// Leave the field out.
+    Omit,
+    /// Write this JSON value as `"base_model"`.
+    Given(serde_json::Value),
+}
+
+impl BaseModel {
+    /// `{"components": {"degree": 3}, "squareness": true, "location": true}`.
+    pub fn standard() -> serde_json::Value {
+        serde_json::json!({"components": {"degree": 3}, "squareness": true, "location": true})
+    }
+
+    /// The value to write for `kind`, if any.
+    pub fn resolve(&self, kind: Kind) -> Option<serde_json::Value> {
+        match self {
+            BaseModel::Default => (kind == Kind::Tracker).then(Self::standard),
+            BaseModel::Omit => None,
+            BaseModel::Given(v) => Some(v.clone()),
+        }
+    }
+}
+
+/// Everything a generator is asked for.
+#[derive(Debug, Clone)]
+pub struct Spec {
+    /// The kind of dataset.
+    pub kind: Kind,
+    /// Hidden effects on top of the ordinary errors.
+    pub hidden: Vec<Hidden>,
+    /// Axis kind: put an ordinary reversal (0.5–3 µm) into the data (not in the axis kind's base
+    /// model, so clean-data studies leave it out).
+    pub ordinary_reversal: bool,
+    /// Base model written in the manifest.
+    pub base_model: BaseModel,
+    /// Multiplies every ordinary error (1 = realistic, 0 = a perfect machine).
+    pub ordinary_scale: f64,
+    /// Multiplies the noise σ (1 = realistic, 0 = noise-free readings).
+    pub noise_scale: f64,
+    /// R-test: number of measurement cycles (re-centred each cycle); `None` draws 1–3.
+    pub cycles: Option<usize>,
+}
+
+impl Spec {
+    /// A realistic dataset of `kind` with `hidden` effects and the default base model.
+    pub fn new(kind: Kind, hidden: &[Hidden]) -> Self {
+        Self {
+            kind,
+            hidden: hidden.to_vec(),
+            ordinary_reversal: false,
+            base_model: BaseModel::Default,
+            ordinary_scale: 1.0,
+            noise_scale: 1.0,
+            cycles: None,
+        }
+    }
+}
+
+/// Writes a realistic dataset of `kind` with `hidden` effects into `dir` (created), drawn from
+/// `seed`; returns the truth. Deterministic for a seed.
+///
+/// # Errors
+/// File-system errors, and `InvalidInput` for a hidden effect the kind cannot carry.
+pub fn write(kind: Kind, hidden: &[Hidden], seed: u64, dir: &Path) -> std::io::Result<Truth> {
+    write_spec(&Spec::new(kind, hidden), seed, dir)
+}
+
+/// [`write`] with every option.
+///
+/// # Errors
+/// As [`write`].
+pub fn write_spec(spec: &Spec, seed: u64, dir: &Path) -> std::io::Result<Truth> {
+    std::fs::create_dir_all(dir)?;
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    match spec.kind {
+        Kind::Axis => axis::write(spec, &mut rng, dir),
+        Kind::Tracker => tracker::write(spec, &mut rng, dir),
+        Kind::Rtest => rtest::write(spec, &mut rng, dir),
+    }
+}
+
+pub(crate) fn unsupported(kind: Kind, h: &Hidden) -> std::io::Error {
+    std::io::Error::new(
+        std::io::ErrorKind::InvalidInput,
+        format!(
+            "hidden effect {h:?} is not available for the {} kind",
+            kind.name()
+        ),
+    )
+}
+
+/// Sawtooth of period 1 in `u`, between −1 and 1.
+pub(crate) fn sawtooth(u: f64) -> f64 {
+    2.0 * (u - u.floor()) - 1.0
+}
+
+/// Linear axis names.
+pub(crate) const LINEAR: [&str; 3] = ["X", "Y", "Z"];

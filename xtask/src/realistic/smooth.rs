@@ -1,0 +1,148 @@
+//! Random smooth error functions: what a real machine's component errors look like.
+//!
+//! A component error of a linear axis is drawn as a random cubic polynomial plus two or three
+//! low-frequency waves of random phase with wavelengths between half and twice the stroke, then
+//! scaled so that its largest deviation from its mean line over the stroke equals a drawn size.
+//! It is deliberately neither a Legendre polynomial nor a single sine: a base model of degree 3
+//! fits it closely but not exactly, as on a real machine. An error motion of a rotary axis is a
+//! random sum of the first three harmonics of a turn (periodic over one turn by construction).
+
+use rand::Rng;
+use std::f64::consts::TAU;
+
+/// A smooth function of a linear axis coordinate over `[lo, hi]` (mm), value in the unit of its
+/// size (the caller decides: mm or rad).
+#[derive(Debug, Clone)]
+pub struct Smooth {
+    lo: f64,
+    hi: f64,
+    poly: [f64; 4],
+    waves: Vec<(f64, f64, f64)>,
+    scale: f64,
+    offset: f64,
+}
+
+impl Smooth {
+    /// The zero function.
+    pub fn zero() -> Self {
+        Self {
+            lo: 0.0,
+            hi: 1.0,
+            poly: [0.0; 4],
+            waves: Vec::new(),
+            scale: 0.0,
+            offset: 0.0,
+        }
+    }
+
+    /// A random smooth function over `[lo, hi]` whose peak-to-valley over the stroke is `size`
+    /// (sign and shape random). Zero at the stroke's lower end, as an interferometer run that is
+    /// zeroed at its first target.
+    pub fn draw(rng: &mut impl Rng, lo: f64, hi: f64, size: f64) -> Self {
+        let stroke = hi - lo;
+        let poly = [
+            0.0,
+            rng.random_range(-1.0..1.0),
+            rng.random_range(-1.0..1.0),
+            rng.random_range(-1.0..1.0),
+        ];
+        let n_waves = rng.random_range(2..=3);
+        let waves = (0..n_waves)
+            .map(|_| {
+                (
+                    rng.random_range(0.2..0.8),
+                    rng.random_range(0.5..2.0) * stroke,
+                    rng.random_range(0.0..TAU),
+                )
+            })
+            .collect();
+        let mut f = Self {
+            lo,
+            hi,
+            poly,
+            waves,
+            scale: 1.0,
+            offset: 0.0,
+        };
+        let samples: Vec<f64> = (0..=200)
+            .map(|i| f.raw(lo + stroke * i as f64 / 200.0))
+            .collect();
+        let max = samples.iter().copied().fold(f64::MIN, f64::max);
+        let min = samples.iter().copied().fold(f64::MAX, f64::min);
+        let sign = if rng.random_bool(0.5) { 1.0 } else { -1.0 };
+        f.scale = sign * size / (max - min).max(1e-12);
+        f.offset = f.raw(lo);
+        f
+    }
+
+    fn raw(&self, x: f64) -> f64 {
+        let u = 2.0 * (x - self.lo) / (self.hi - self.lo) - 1.0;
+        let p = self.poly[0] + u * (self.poly[1] + u * (self.poly[2] + u * self.poly[3]));
+        p + self
+            .waves
+            .iter()
+            .map(|(a, l, ph)| a * (TAU * (x - self.lo) / l + ph).sin())
+            .sum::<f64>()
+    }
+
+    /// The value at `x`.
+    pub fn at(&self, x: f64) -> f64 {
+        if self.scale == 0.0 {
+            return 0.0;
+        }
+        self.scale * (self.raw(x) - self.offset)
+    }
+}
+
+/// A smooth periodic function of a rotary axis angle (rad): random first to third harmonics of a
+/// turn, largest absolute value `size`.
+#[derive(Debug, Clone)]
+pub struct Periodic {
+    harmonics: Vec<(f64, f64, f64)>,
+}
+
+impl Periodic {
+    /// The zero function.
+    pub fn zero() -> Self {
+        Self {
+            harmonics: Vec::new(),
+        }
+    }
+
+    /// A random periodic function with largest absolute value `size`.
+    pub fn draw(rng: &mut impl Rng, size: f64) -> Self {
+        let mut harmonics: Vec<(f64, f64, f64)> = (1..=3)
+            .map(|k| {
+                (
+                    rng.random_range(0.2..1.0) / k as f64,
+                    k as f64,
+                    rng.random_range(0.0..TAU),
+                )
+            })
+            .collect();
+        let f = Self {
+            harmonics: harmonics.clone(),
+        };
+        let max = (0..360)
+            .map(|i| f.at((i as f64).to_radians()).abs())
+            .fold(0.0, f64::max);
+        for h in &mut harmonics {
+            h.0 *= size / max.max(1e-12);
+        }
+        Self { harmonics }
+    }
+
+    /// The value at angle `theta` (rad).
+    pub fn at(&self, theta: f64) -> f64 {
+        self.harmonics
+            .iter()
+            .map(|(a, k, ph)| a * (k * theta + ph).sin())
+            .sum()
+    }
+}
+
+/// A size drawn uniformly in `[lo, hi]` with a random sign.
+pub fn signed(rng: &mut impl Rng, lo: f64, hi: f64) -> f64 {
+    let v = rng.random_range(lo..=hi);
+    if rng.random_bool(0.5) { v } else { -v }
+}

@@ -1,0 +1,371 @@
+//! The realistic generators checked against independent facts: a machine without errors gives
+//! zero readings and tracker lengths equal to the station–target distances, a pure squareness
+//! gives the analytic tip deviation, a B pivot offset gives the ISO 10791-6 BK1 pattern, a
+//! reversal separates the two directions by its size, and nothing hidden reaches the files.
+
+use std::collections::BTreeMap;
+use std::path::Path;
+
+use approx::assert_abs_diff_eq;
+use xtask::realistic::geom::V3;
+use xtask::realistic::rtest::BcMachine;
+use xtask::realistic::smooth::{Periodic, Smooth};
+use xtask::realistic::tracker::TrackerMachine;
+use xtask::realistic::{BaseModel, Hidden, Kind, Spec, write, write_spec};
+
+/// Rows of a CSV file as maps from header to field.
+fn read_csv(path: &Path) -> Vec<BTreeMap<String, String>> {
+    let text = std::fs::read_to_string(path).unwrap();
+    let mut lines = text
+        .lines()
+        .filter(|l| !l.is_empty() && !l.starts_with('#'));
+    let header: Vec<String> = lines.next().unwrap().split(',').map(String::from).collect();
+    lines
+        .map(|l| {
+            header
+                .iter()
+                .cloned()
+                .zip(l.split(',').map(String::from))
+                .collect()
+        })
+        .collect()
+}
+
+fn num(row: &BTreeMap<String, String>, key: &str) -> f64 {
+    row[key].parse().unwrap()
+}
+
+fn perfect(kind: Kind, hidden: &[Hidden]) -> Spec {
+    let mut s = Spec::new(kind, hidden);
+    s.ordinary_scale = 0.0;
+    s.noise_scale = 0.0;
+    s
+}
+
+fn tmp(name: &str) -> std::path::PathBuf {
+    std::env::temp_dir().join(format!("xtask-realistic-{name}-{}", std::process::id()))
+}
+
+/// Values are printed with 4 decimals of a µm (R-test, axis) or 7 decimals of a mm (tracker):
+/// the tolerances are half a unit of the last printed digit.
+const PRINT_UM: f64 = 5e-5;
+const PRINT_MM: f64 = 5e-8;
+
+#[test]
+fn perfect_bc_trunnion_gives_zero_readings() {
+    let dir = tmp("rtest-zero");
+    let truth = write_spec(&perfect(Kind::Rtest, &[]), 3, &dir).unwrap();
+    let rows = read_csv(&dir.join("rtest.csv"));
+    assert_eq!(rows.len() * 3, truth.n_observations);
+    for r in &rows {
+        for k in ["dx_um", "dy_um", "dz_um"] {
+            assert!(num(r, k).abs() <= 1e-9, "{r:?}");
+        }
+    }
+    // And in memory, without printing: readings of a perfect machine vanish to 1e-9 µm.
+    let m = BcMachine::perfect(100.0, 150.0);
+    let ball = V3::new(120.0, -80.0, 60.0);
+    let actual = m.centre_ball(ball, 0.5, 0.0);
+    for b in [-1.5, -0.3, 0.0, 0.7, 1.9] {
+        for c in [0.0, 1.0, 3.0, 6.0] {
+            let r = m.reading(ball, actual, b, c, 10.0);
+            assert!(r.norm() <= 1e-9, "{r}");
+        }
+    }
+}
+
+#[test]
+fn b_pivot_offset_gives_the_bk1_pattern() {
+    // B turns about a line through (δ, 0, 0) parallel to Y: the ball (centred at B = 0) moves
+    // against the nest by (I − Rot_y(−b))·δx̂ = δ·(1 − cos b, 0, −sin b), whatever the ball
+    // position (ISO 10791-6 BK1, the pattern of EX0B).
+    let delta = 0.012;
+    let mut m = BcMachine::perfect(100.0, 150.0);
+    m.location.ex0b = delta;
+    for ball in [V3::new(0.0, 177.0, 60.0), V3::new(-150.0, 40.0, 120.0)] {
+        let actual = m.centre_ball(ball, 0.0, 0.0);
+        for b_deg in [-90.0_f64, -45.0, 0.0, 30.0, 90.0] {
+            let b = b_deg.to_radians();
+            let r = m.reading(ball, actual, b, 0.0, 0.0);
+            let expected = V3::new(1.0 - b.cos(), 0.0, -b.sin()) * delta * 1e3;
+            assert_abs_diff_eq!(r, expected, epsilon = 1e-9);
+        }
+    }
+}
+
+#[test]
+fn perfect_tracker_lengths_are_station_target_distances() {
+    let dir = tmp("tracker-zero");
+    let truth = write_spec(&perfect(Kind::Tracker, &[]), 4, &dir).unwrap();
+    let targets: BTreeMap<String, [f64; 3]> = read_csv(&dir.join("targets.csv"))
+        .iter()
+        .map(|r| {
+            (
+                r["id"].clone(),
+                [num(r, "x_mm"), num(r, "y_mm"), num(r, "z_mm")],
+            )
+        })
+        .collect();
+    let lengths = read_csv(&dir.join("lengths.csv"));
+    assert_eq!(lengths.len(), truth.n_observations);
+    assert!((4..=6).contains(&truth.stations.len()));
+    assert!((60..=150).contains(&targets.len()));
+    for r in &lengths {
+        let j: usize = r["station"][1..].parse().unwrap();
+        let (st, dead) = truth.stations[j - 1];
+        let p = targets[&r["target"]];
+        let d = ((st[0] - p[0]).powi(2) + (st[1] - p[1]).powi(2) + (st[2] - p[2]).powi(2)).sqrt();
+        assert_abs_diff_eq!(num(r, "length_mm"), d - dead, epsilon = PRINT_MM);
+    }
+}
+
+#[test]
+fn tracker_length_scale_multiplies_the_distances() {
+    let dir = tmp("tracker-scale");
+    let truth = write_spec(
+        &perfect(Kind::Tracker, &[Hidden::TrackerScale { ppm: 7.0 }]),
+        5,
+        &dir,
+    )
+    .unwrap();
+    let targets: BTreeMap<String, [f64; 3]> = read_csv(&dir.join("targets.csv"))
+        .iter()
+        .map(|r| {
+            (
+                r["id"].clone(),
+                [num(r, "x_mm"), num(r, "y_mm"), num(r, "z_mm")],
+            )
+        })
+        .collect();
+    for r in read_csv(&dir.join("lengths.csv")) {
+        let j: usize = r["station"][1..].parse().unwrap();
+        let (st, dead) = truth.stations[j - 1];
+        let p = targets[&r["target"]];
+        let d = ((st[0] - p[0]).powi(2) + (st[1] - p[1]).powi(2) + (st[2] - p[2]).powi(2)).sqrt();
+        assert_abs_diff_eq!(
+            num(&r, "length_mm"),
+            (1.0 + 7e-6) * d - dead,
+            epsilon = PRINT_MM
+        );
+    }
+}
+
+#[test]
+fn pure_squareness_gives_the_analytic_tip_deviation() {
+    // The Y motion along Rot_z(γ)·ŷ = (−sin γ, cos γ, 0): tip deviation y·(−sin γ, cos γ − 1, 0).
+    // The Z motion along Rot_x(α)·Rot_y(β)·ẑ: tip deviation z·(Rot_x(α)·Rot_y(β)·ẑ − ẑ).
+    let (gamma, alpha, beta) = (40e-6, -25e-6, 15e-6);
+    let strokes = [(0.0, 700.0), (-500.0, 0.0), (-600.0, 0.0)];
+    let mut m = TrackerMachine::perfect(strokes, 100.0, 50.0, 150.0);
+    m.squareness = [gamma, 0.0, 0.0];
+    for q in [
+        [0.0, -500.0, -300.0],
+        [350.0, -120.0, 0.0],
+        [700.0, -1.0, -600.0],
+    ] {
+        let e = m.tip_error(q);
+        let y = q[1];
+        assert_abs_diff_eq!(
+            e,
+            V3::new(-y * gamma.sin(), y * (gamma.cos() - 1.0), 0.0),
+            epsilon = 1e-12
+        );
+    }
+    m.squareness = [0.0, alpha, beta];
+    for q in [[0.0, -500.0, -300.0], [700.0, 0.0, -600.0]] {
+        let z = q[2];
+        let u = V3::new(
+            beta.sin(),
+            -alpha.sin() * beta.cos(),
+            alpha.cos() * beta.cos(),
+        );
+        assert_abs_diff_eq!(m.tip_error(q), z * (u - V3::z()), epsilon = 1e-12);
+    }
+    // A machine without errors puts the tip at (X, Y, Z).
+    let m = TrackerMachine::perfect(strokes, 80.0, 30.0, 200.0);
+    assert!(m.tip_error([123.0, -321.0, -456.0]).norm() < 1e-12);
+}
+
+#[test]
+fn reversal_separates_the_directions_by_its_size() {
+    let dir = tmp("axis-reversal");
+    write_spec(
+        &perfect(Kind::Axis, &[Hidden::Reversal { um: 2.5 }]),
+        6,
+        &dir,
+    )
+    .unwrap();
+    let rows = read_csv(&dir.join("runs.csv"));
+    assert!(!rows.is_empty());
+    for r in &rows {
+        let expected = if r["direction"] == "+" { 1.25 } else { -1.25 };
+        assert_abs_diff_eq!(num(r, "deviation_um"), expected, epsilon = PRINT_UM);
+    }
+    // Perfect and noise-free without hidden effects: all zero.
+    let dir = tmp("axis-zero");
+    write_spec(&perfect(Kind::Axis, &[]), 6, &dir).unwrap();
+    for r in read_csv(&dir.join("runs.csv")) {
+        assert!(num(&r, "deviation_um").abs() <= 1e-9);
+    }
+}
+
+#[test]
+fn axis_pitch_is_a_sine_of_the_stated_amplitude_and_period() {
+    let dir = tmp("axis-pitch");
+    let (a, p) = (2.0, 17.0);
+    write_spec(
+        &perfect(
+            Kind::Axis,
+            &[Hidden::Pitch {
+                axis: 0,
+                amplitude_um: a,
+                period_mm: p,
+            }],
+        ),
+        8,
+        &dir,
+    )
+    .unwrap();
+    // dev = a·sin(2πx/p + φ) = s·sin(2πx/p) + c·cos(2πx/p): least squares for (s, c), then
+    // every reading is on that sine and s² + c² = a².
+    let rows = read_csv(&dir.join("runs.csv"));
+    let (mut ss, mut sc, mut cc, mut sy, mut cy) = (0.0, 0.0, 0.0, 0.0, 0.0);
+    for r in &rows {
+        let w = std::f64::consts::TAU * num(r, "x_mm") / p;
+        let y = num(r, "deviation_um");
+        ss += w.sin() * w.sin();
+        sc += w.sin() * w.cos();
+        cc += w.cos() * w.cos();
+        sy += w.sin() * y;
+        cy += w.cos() * y;
+    }
+    let det = ss * cc - sc * sc;
+    let s = (sy * cc - cy * sc) / det;
+    let c = (cy * ss - sy * sc) / det;
+    assert_abs_diff_eq!((s * s + c * c).sqrt(), a, epsilon = 1e-3);
+    for r in &rows {
+        let w = std::f64::consts::TAU * num(r, "x_mm") / p;
+        assert_abs_diff_eq!(
+            num(r, "deviation_um"),
+            s * w.sin() + c * w.cos(),
+            epsilon = 1e-3
+        );
+    }
+}
+
+#[test]
+fn generators_are_deterministic_and_hide_the_truth() {
+    for kind in Kind::ALL {
+        let hidden: Vec<Hidden> = match kind {
+            Kind::Axis => vec![Hidden::RiseFall {
+                um: 2.0,
+                tau_s: 500.0,
+            }],
+            Kind::Tracker => vec![Hidden::Pitch {
+                axis: 0,
+                amplitude_um: 2.0,
+                period_mm: 20.0,
+            }],
+            Kind::Rtest => vec![Hidden::PivotDrift {
+                rotary: 0,
+                um: 10.0,
+                tau_s: 900.0,
+            }],
+        };
+        let (a, b, c) = (
+            tmp(&format!("{}-a", kind.name())),
+            tmp(&format!("{}-b", kind.name())),
+            tmp(&format!("{}-c", kind.name())),
+        );
+        let ta = write(kind, &hidden, 11, &a).unwrap();
+        write(kind, &hidden, 11, &b).unwrap();
+        write(kind, &[], 11, &c).unwrap();
+        assert_eq!(ta.effects.len(), 1);
+        let files = |d: &Path| {
+            let mut v: Vec<String> = std::fs::read_dir(d)
+                .unwrap()
+                .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+                .collect();
+            v.sort();
+            v
+        };
+        assert_eq!(files(&a), files(&b));
+        assert_eq!(
+            files(&a),
+            files(&c),
+            "same files with and without hidden effects"
+        );
+        for f in files(&a) {
+            assert_eq!(
+                std::fs::read(a.join(&f)).unwrap(),
+                std::fs::read(b.join(&f)).unwrap(),
+                "{f} differs for one seed"
+            );
+        }
+        let manifest: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(&ta.manifest).unwrap()).unwrap();
+        let clean: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(c.join("manifest.json")).unwrap())
+                .unwrap();
+        for field in [
+            "description",
+            "note",
+            "instrument",
+            "kind",
+            "format",
+            "base_model",
+        ] {
+            assert_eq!(manifest.get(field), clean.get(field), "{field}");
+        }
+        let text = std::fs::read_to_string(&ta.manifest)
+            .unwrap()
+            .to_lowercase();
+        for word in ["pitch", "drift", "hidden", "sawtooth", "truth", "rise"] {
+            assert!(!text.contains(word), "`{word}` in the manifest");
+        }
+    }
+}
+
+#[test]
+fn base_model_defaults_per_kind() {
+    let standard = BaseModel::standard();
+    assert_eq!(
+        BaseModel::Default.resolve(Kind::Tracker),
+        Some(standard.clone())
+    );
+    assert_eq!(BaseModel::Default.resolve(Kind::Axis), None);
+    assert_eq!(BaseModel::Default.resolve(Kind::Rtest), None);
+    assert_eq!(BaseModel::Omit.resolve(Kind::Tracker), None);
+    assert_eq!(standard["components"]["degree"], 3);
+}
+
+#[test]
+fn smooth_functions_have_their_size_and_rotary_ones_close_over_a_turn() {
+    use rand::SeedableRng;
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(9);
+    for _ in 0..20 {
+        let f = Smooth::draw(&mut rng, -300.0, 500.0, 0.007);
+        let v: Vec<f64> = (0..=800).map(|i| f.at(-300.0 + i as f64)).collect();
+        let pv =
+            v.iter().copied().fold(f64::MIN, f64::max) - v.iter().copied().fold(f64::MAX, f64::min);
+        // Sampled every 1 mm here, every 4 mm when scaled: the peak-to-valley agrees to 1 %.
+        assert_abs_diff_eq!(pv, 0.007, epsilon = 7e-5);
+        assert_abs_diff_eq!(f.at(-300.0), 0.0, epsilon = 1e-15);
+        let g = Periodic::draw(&mut rng, 5e-6);
+        for t in [0.0, 1.0, 2.5, 4.0] {
+            assert_abs_diff_eq!(g.at(t), g.at(t + std::f64::consts::TAU), epsilon = 1e-15);
+        }
+    }
+}
+
+#[test]
+fn unsupported_effects_are_refused() {
+    let err = write(
+        Kind::Axis,
+        &[Hidden::BTilt { urad: 10.0 }],
+        1,
+        &tmp("refuse"),
+    )
+    .unwrap_err();
+    assert_eq!(err.kind(), std::io::ErrorKind::InvalidInput);
+}
