@@ -41,8 +41,11 @@ pub struct Outcome {
     pub chi2_p_value: Option<f64>,
     /// Held-out RMS of the base model, µm.
     pub base_held_out_rms_um: f64,
-    /// Held-out RMS of the extended model, µm.
+    /// Held-out RMS of the diagnosed model (the whole search repeated without each outer
+    /// fold), µm.
     pub extended_held_out_rms_um: f64,
+    /// The diagnosis' verdict.
+    pub verdict: mte_diagnose::Verdict,
 }
 
 /// One dataset of a study.
@@ -125,8 +128,13 @@ pub fn run_one(spec: &Spec, index: usize, seed: u64, work: &Path) -> Record {
                 .collect(),
             sigma0: d.extended.sigma0,
             chi2_p_value: d.extended.chi2_p_value,
-            base_held_out_rms_um: d.base.held_out_rms * 1e3,
-            extended_held_out_rms_um: d.extended.held_out_rms * 1e3,
+            base_held_out_rms_um: d.held_out.as_ref().map_or(f64::NAN, |h| h.base_rms) * 1e3,
+            extended_held_out_rms_um: d
+                .held_out
+                .as_ref()
+                .map_or(f64::NAN, |h| h.diagnosed_rms)
+                * 1e3,
+            verdict: d.verdict,
         });
     let _ = std::fs::remove_dir_all(&dir);
     Record {
@@ -198,6 +206,8 @@ pub struct FdrSummary {
     pub errors: usize,
     /// Datasets with at least one finding.
     pub with_finding: usize,
+    /// Datasets whose verdict is "no significant discrepancy".
+    pub no_discrepancy: usize,
     /// Finding names by frequency (datasets naming them).
     pub names: Vec<(String, usize)>,
     /// Quantiles of σ0 of the extended fit (min, 10 %, median, 90 %, max).
@@ -252,6 +262,10 @@ pub fn fdr_with(kind: Kind, n: usize, base_seed: u64, base_model: &BaseModel) ->
         n,
         errors: records.len() - ok.len(),
         with_finding: ok.iter().filter(|(_, o)| !o.findings.is_empty()).count(),
+        no_discrepancy: ok
+            .iter()
+            .filter(|(_, o)| o.verdict == mte_diagnose::Verdict::NoDiscrepancy)
+            .count(),
         names: name_counts(
             ok.iter()
                 .flat_map(|(_, o)| o.findings.iter().map(|f| f.name.as_str())),
@@ -615,12 +629,10 @@ pub fn openworld_with(
             s.errors += 1;
             continue;
         };
-        if o.findings.is_empty() {
-            s.nothing += 1;
-        } else if o.chi2_p_value.is_some_and(|p| p < 0.01) || o.sigma0 > 1.5 {
-            s.unexplained += 1;
-        } else {
-            s.confident_wrong += 1;
+        match o.verdict {
+            mte_diagnose::Verdict::NoDiscrepancy => s.nothing += 1,
+            mte_diagnose::Verdict::Unexplained => s.unexplained += 1,
+            _ => s.confident_wrong += 1,
         }
         all_names.extend(o.findings.iter().map(|f| f.name.clone()));
     }
@@ -697,7 +709,7 @@ contain). A dataset counts as a false discovery when the diagnosis reports any f
 ordinary errors outside the engine's default base model (e.g. the R-test orientation location \
 errors and rotary error motions, the smooth positioning error of an axis) are real, and findings \
 naming them are not wrong causes; the table shows what a user would see.\n\n\
-| kind | datasets | errors | with a finding | most frequent findings | σ0 (min / 10 % / median / 90 % / max) | held-out RMS ÷ σ, base → extended (median) |\n|---|---|---|---|---|---|---|"
+| kind | datasets | errors | with a finding | verdict \"no significant discrepancy\" | most frequent findings | σ0 (min / 10 % / median / 90 % / max) | held-out RMS ÷ σ, base → diagnosed (median) |\n|---|---|---|---|---|---|---|---|"
         );
         for f in &r.fdr {
             let q = f.sigma0.map_or("–".into(), |q| {
@@ -711,11 +723,12 @@ naming them are not wrong causes; the table shows what a user would see.\n\n\
                 .map_or("–".into(), |(a, b)| format!("{a:.2} → {b:.2}"));
             let _ = writeln!(
                 s,
-                "| {} | {} | {} | {} | {} | {q} | {h} |",
+                "| {} | {} | {} | {} | {} | {} | {q} | {h} |",
                 f.kind.name(),
                 f.n,
                 f.errors,
                 pct(f.with_finding, f.n - f.errors),
+                pct(f.no_discrepancy, f.n - f.errors),
                 top(&f.names, 5)
             );
         }
