@@ -16,8 +16,7 @@ pub use mte_sensitivity::Distribution;
 /// # Errors
 /// [`crate::Error::Invalid`] for t ≤ 0 or k ≤ 0.
 pub fn from_tolerance(tolerance: f64, sigma_level: f64, truncate: bool) -> Result<Distribution> {
-    if !(tolerance.is_finite() && tolerance > 0.0 && sigma_level.is_finite() && sigma_level > 0.0)
-    {
+    if !(tolerance.is_finite() && tolerance > 0.0 && sigma_level.is_finite() && sigma_level > 0.0) {
         return Err(invalid(
             "tolerance distribution",
             format!("tolerance {tolerance} and sigma level {sigma_level} must be > 0"),

@@ -1,8 +1,8 @@
 //! The pose-error sensitivity model: its first-order map against central differences of the
 //! exact pose error, and its input errors.
 
-use mte_errors::pose_model::{Linearisation, PoseErrorModel, PoseModelError};
 use mte_errors::Catalogue;
+use mte_errors::pose_model::{Linearisation, PoseErrorModel, PoseModelError};
 use mte_kinematics::Machine;
 use mte_sensitivity::Model;
 
@@ -102,9 +102,9 @@ fn bad_points_give_clear_errors() {
 
 // ---- Error-set models: random entries as inputs, fixed entries held ----
 
-use mte_errors::pose_model::{diagonal_points, generalised_index};
 use mte_errors::distribution::Distribution as ErrDist;
 use mte_errors::errorset::ModelSpec;
+use mte_errors::pose_model::{diagonal_points, generalised_index};
 use mte_errors::units::Kind;
 use mte_errors::{AxisState, ErrorSet, Evaluator};
 use mte_sensitivity::sobol::{SobolParams, sobol};
@@ -196,12 +196,7 @@ fn variance(d: ErrDist) -> f64 {
     match d {
         ErrDist::Normal { sd, .. } => sd * sd,
         ErrDist::Uniform { lo, hi } => (hi - lo).powi(2) / 12.0,
-        ErrDist::TruncatedNormal {
-            mean,
-            sd,
-            lo,
-            hi,
-        } => {
+        ErrDist::TruncatedNormal { mean, sd, lo, hi } => {
             let (a, b) = ((lo - mean) / sd, (hi - mean) / sd);
             let z = normal_cdf(b) - normal_cdf(a);
             let r = (pdf(a) - pdf(b)) / z;

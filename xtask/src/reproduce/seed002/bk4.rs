@@ -4,13 +4,13 @@
 use super::{BALL, Truth, deg, set, um};
 use mte_kinematics::Machine;
 use mte_linalg::Vec3;
+use mte_rtest::Result;
 use mte_rtest::compensate::{Bk4Range, corrected_controller, predict_bk4};
 use mte_rtest::identify::{Fit, FitSpec, identify};
 use mte_rtest::model::ErrorField;
 use mte_rtest::names::slot_by_name;
 use mte_rtest::program::Program;
 use mte_rtest::simulate::{PlanItem, SetupSpec, SimOptions, simulate};
-use mte_rtest::Result;
 use std::fmt::Write;
 
 /// C angle of the single-position session (C = 180° puts the ball at machine Y = −177 mm).
@@ -363,8 +363,13 @@ mod tests {
             // the B-line points at machine Y = y and y + 100 (nominal pose), carried by the table
             let on_line = |yy: f64, e: &[f64]| {
                 let w0 = m.branch_poses(&q, &vec![0.0; n]).workpiece_in_base;
-                let p = w0.inverse().transform_point(&Vec3::new(0.0, yy, 0.0).into());
-                m.branch_poses(&q, e).workpiece_in_base.transform_point(&p).coords
+                let p = w0
+                    .inverse()
+                    .transform_point(&Vec3::new(0.0, yy, 0.0).into());
+                m.branch_poses(&q, e)
+                    .workpiece_in_base
+                    .transform_point(&p)
+                    .coords
             };
             let moved = (on_line(y, &c) - on_line(y, &vec![0.0; n])).norm();
             // second-order residue: δ²·|y| ≈ 2e-6 mm

@@ -71,7 +71,6 @@ fn header(w: &mut String) {
         w,
         "- The cause found in the paper (\"the Y axis sags in Z while moving out in Y\") is modelled as a Y straightness δz(y) = α·y; the 3.5 µm XOB difference as δx(y) = γ·y. The single-position results are BK1 fits of (EX0B, EZ0B, EA0B, EC0B) + sensor zero.\n"
     );
-
 }
 
 pub(super) fn set(m: &Machine, e: &mut [f64], name: &str, v: f64) -> Result<()> {

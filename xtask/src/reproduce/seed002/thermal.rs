@@ -4,12 +4,12 @@
 use super::{BALL, deg, um};
 use mte_kinematics::Machine;
 use mte_linalg::Vec3;
+use mte_rtest::Result;
 use mte_rtest::identify::FitSpec;
 use mte_rtest::names::slot_by_name;
 use mte_rtest::program::Program;
 use mte_rtest::simulate::{PlanItem, SetupSpec, SimOptions, simulate};
 use mte_rtest::thermal::track;
-use mte_rtest::Result;
 use std::fmt::Write;
 
 /// The generator (the paper's values at t = 0, 5 and 30 min, joined linearly), the 19 cycles, and
