@@ -3,8 +3,8 @@
 //! machine `seed002-bc-trunnion`. [`generate`] returns the Markdown of
 //! `docs/reproduction/seed002.md` (the paper's values beside ours). Deterministic (fixed seeds).
 //!
-//! One function per section of the page: [`table2`] here, the BK4 sections in [`bk4`], the
-//! thermal tables in [`thermal`].
+//! One function per section of the page: `table2` here, the BK4 sections in `bk4.rs`, the
+//! thermal tables in `thermal.rs`.
 
 mod bk4;
 mod thermal;
