@@ -130,34 +130,19 @@ pub(super) fn compensation(
     truth: &Truth,
     opts: &SimOptions,
 ) -> Result<(Truth, Story)> {
-    let Truth {
-        ref base,
-        yi,
-        sz,
-        sx,
-        alpha,
-        gamma,
-    } = *truth;
     let _ = writeln!(w, "## BK4 before and after compensation (Figs. 5–7, 9)\n");
     // C pivot errors added to the Table-2 truth; their size is set so that the uncompensated BK4
     // range (single-position session at C = 180°) is the measured 69 µm (bisection on one scale
     // factor) — everything after is predicted
     let c_dir = [("EX0C", 1.0), ("EY0C", -1.3)];
     let bk4_for = |k: f64| -> Result<(Truth, f64)> {
-        let mut b = base.clone();
+        let mut b = truth.base.clone();
         for (nm, f) in c_dir {
             set(m, &mut b, nm, k * f * 1e-3)?;
         }
         set(m, &mut b, "EA0C", 0.0004f64.to_radians())?;
         set(m, &mut b, "EB0C", (-0.0003f64).to_radians())?;
-        let t = Truth {
-            base: b,
-            yi,
-            sz,
-            sx,
-            alpha,
-            gamma,
-        };
+        let t = truth.with_base(b);
         let r = predict_bk4(m, &t.field(), &[], &session(m, SINGLE_C_DEG)?.setup)?.max_range_um;
         Ok((t, r))
     };
@@ -247,23 +232,9 @@ pub(super) fn mechanism(
     opts: &SimOptions,
 ) -> Result<()> {
     let n = m.n_slots();
-    let Truth {
-        yi,
-        sz,
-        sx,
-        alpha,
-        gamma,
-        ..
-    } = *truth;
+    let alpha = truth.alpha;
     // the same sequence on the Y-axis errors alone (no pivot or tilt errors) shows the mechanism
-    let sag = Truth {
-        base: vec![0.0; n],
-        yi,
-        sz,
-        sx,
-        alpha,
-        gamma,
-    };
+    let sag = truth.with_base(vec![0.0; n]);
     let sag_main = bk4_story(m, &sag.field(), SINGLE_C_DEG, opts)?;
     let sag_other = bk4_story(m, &sag.field(), 0.0, opts)?;
     let xyz = |r: &Bk4Range| {

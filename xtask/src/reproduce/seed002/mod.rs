@@ -91,6 +91,14 @@ struct Truth {
 }
 
 impl Truth {
+    /// The same Y errors on other base slot values.
+    fn with_base(&self, base: Vec<f64>) -> Truth {
+        Truth {
+            base,
+            ..self.clone()
+        }
+    }
+
     fn field(&self) -> impl Fn(&[f64], f64) -> Vec<f64> + '_ {
         move |q: &[f64], _t: f64| {
             let mut e = self.base.clone();
@@ -154,15 +162,16 @@ fn table2(w: &mut String, m: &Machine) -> Result<(Truth, SimOptions)> {
     };
     // orientation of the sag: Table 2 has the lower ZOB at Y = −177 and the higher XOB there;
     // the signs of α and γ are set from a noise-free probe so the generator matches that
+    let truth_with = |alpha: f64, gamma: f64| Truth {
+        base: base.clone(),
+        yi,
+        sz,
+        sx,
+        alpha,
+        gamma,
+    };
     let probe = |alpha: f64, gamma: f64| -> Result<(f64, f64)> {
-        let t = Truth {
-            base: base.clone(),
-            yi,
-            sz,
-            sx,
-            alpha,
-            gamma,
-        };
+        let t = truth_with(alpha, gamma);
         let sim = simulate(
             m,
             &two_positions(m)?,
@@ -185,14 +194,7 @@ fn table2(w: &mut String, m: &Machine) -> Result<(Truth, SimOptions)> {
     let (dx, dz) = probe(alpha0, gamma0)?;
     let alpha = if dz < 0.0 { alpha0 } else { -alpha0 };
     let gamma = if dx > 0.0 { gamma0 } else { -gamma0 };
-    let truth = Truth {
-        base: base.clone(),
-        yi,
-        sz,
-        sx,
-        alpha,
-        gamma,
-    };
+    let truth = truth_with(alpha, gamma);
     let sim = simulate(m, &two_positions(m)?, &truth.field(), &opts)?;
     let cons = setup_consistency(m, &sim.dataset, &spec_b)?;
     let _ = writeln!(w, "## Table 2 — BK1 at Y = −177 and Y = +177 mm\n");
