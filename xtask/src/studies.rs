@@ -129,10 +129,7 @@ pub fn run_one(spec: &Spec, index: usize, seed: u64, work: &Path) -> Record {
             sigma0: d.extended.sigma0,
             chi2_p_value: d.extended.chi2_p_value,
             base_held_out_rms_um: d.held_out.as_ref().map_or(f64::NAN, |h| h.base_rms) * 1e3,
-            extended_held_out_rms_um: d
-                .held_out
-                .as_ref()
-                .map_or(f64::NAN, |h| h.diagnosed_rms)
+            extended_held_out_rms_um: d.held_out.as_ref().map_or(f64::NAN, |h| h.diagnosed_rms)
                 * 1e3,
             verdict: d.verdict,
         });

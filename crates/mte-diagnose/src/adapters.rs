@@ -45,13 +45,7 @@ fn load_machine(manifest: &Manifest, dir: &Path, manifest_path: &Path) -> Result
             detail: "field `machine`: missing (a library machine name or a machine JSON file)"
                 .into(),
         })?;
-    let file = dir.join(name);
-    let machine = if file.is_file() {
-        Machine::from_file(&file)
-    } else {
-        Machine::library(name)
-    };
-    machine.map_err(|e| DiagnoseError::Dataset {
+    Machine::library_or_file(name, dir).map_err(|e| DiagnoseError::Dataset {
         path: manifest_path.display().to_string(),
         detail: format!("field `machine`: {e}"),
     })
@@ -413,16 +407,11 @@ pub(crate) fn prepare_rtest(manifest_path: &Path, noise_um: Option<f64>) -> Resu
             detail: "field `machine`: missing".into(),
         })?;
     let dir = manifest_path.parent().unwrap_or(Path::new("."));
-    let file = dir.join(machine_name);
-    let machine = if file.is_file() {
-        Machine::from_file(&file)
-    } else {
-        Machine::library(machine_name)
-    }
-    .map_err(|e| DiagnoseError::Dataset {
-        path: path.clone(),
-        detail: format!("field `machine`: {e}"),
-    })?;
+    let machine =
+        Machine::library_or_file(machine_name, dir).map_err(|e| DiagnoseError::Dataset {
+            path: path.clone(),
+            detail: format!("field `machine`: {e}"),
+        })?;
     let rotary = |name: &str| {
         machine
             .axis_index(name)

@@ -110,6 +110,303 @@ fn principal(d: &Vec3) -> Option<usize> {
     (0..3).find(|&i| (d[i].abs() - 1.0).abs() < 1e-9)
 }
 
+/// ISO 230-1 letter of a slot component: X, Y, Z for translations, A, B, C for rotations about
+/// X, Y, Z.
+///
+/// ```
+/// use mte_errors::catalogue::component_letter;
+/// use mte_kinematics::Component;
+/// assert_eq!(component_letter(Component::Ey), 'B');
+/// ```
+pub fn component_letter(c: Component) -> char {
+    LETTERS[c.index()].chars().next().unwrap_or('?')
+}
+
+/// The component an ISO 230-1 letter names (inverse of [`component_letter`]).
+pub fn component_of_letter(letter: char) -> Option<Component> {
+    LETTERS
+        .iter()
+        .position(|l| l.starts_with(letter))
+        .map(comp_at)
+}
+
+/// ISO 230-1 name of a location error of `axis` (constant error of component `c` of the body
+/// the axis moves, relative to its parent): `E<c>0<axis>`, e.g. `EX0C`, `EB0A`.
+pub fn location_error_name(c: Component, axis: &str) -> String {
+    format!("E{}0{axis}", component_letter(c))
+}
+
+/// Splits an ISO 230-1 location error name `E<c>0<axis>` into its component and axis name;
+/// `None` when `name` does not have that form.
+///
+/// ```
+/// use mte_errors::catalogue::parse_location_error_name;
+/// use mte_kinematics::Component;
+/// assert_eq!(parse_location_error_name("EA0Y"), Some((Component::Ex, "Y")));
+/// assert_eq!(parse_location_error_name("EXX"), None);
+/// ```
+pub fn parse_location_error_name(name: &str) -> Option<(Component, &str)> {
+    let rest = name.strip_prefix('E')?;
+    let mut chars = rest.chars();
+    let c = component_of_letter(chars.next()?)?;
+    let axis = chars.as_str().strip_prefix('0')?;
+    (!axis.is_empty()).then_some((c, axis))
+}
+
+/// IBS / ISO 10791-6 report name of a rotary-axis location error: `<c>O<axis>`, e.g. `XOB`.
+pub fn ibs_location_name(c: Component, axis: &str) -> String {
+    format!("{}O{axis}", component_letter(c))
+}
+
+/// The four location errors across a rotary axis named A, B or C (ISO 230-7; A, B, C turn
+/// about X, Y, Z): the two translations and the two tilts not along the axis itself, e.g. for
+/// B: X, Z, A, C (`EX0B`, `EZ0B`, `EA0B`, `EC0B`). `None` for another name.
+pub fn rotary_location_components(axis: &str) -> Option<[Component; 4]> {
+    use Component::{Dx, Dy, Dz, Ex, Ey, Ez};
+    Some(match axis {
+        "A" => [Dy, Dz, Ey, Ez],
+        "B" => [Dx, Dz, Ex, Ez],
+        "C" => [Dx, Dy, Ex, Ey],
+        _ => return None,
+    })
+}
+
+/// The squareness errors of the linear axes X, Y, Z: X is the reference, Y is squared to X
+/// (`EC0Y`), Z to X and Y (`EB0Z`, `EA0Z`).
+pub const SQUARENESS_NAMES: [&str; 3] = ["EC0Y", "EB0Z", "EA0Z"];
+
+/// The ISO 230-1 view of one error slot ([`slot_name`]).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct SlotName {
+    /// The slot's parameter name in [`Catalogue::for_machine`]: `E<c><axis>` for an axis'
+    /// error motion, `E<c>0<axis>` for a rotary axis' location, `E<c>0[<body>]` for assembly
+    /// and set-up, `E<c>[<body>]` for the error motion of a fixed body.
+    pub name: String,
+    /// A short label, e.g. "straightness in y of the X axis".
+    pub label: String,
+    /// Physical meaning in plain words (the catalogue's [`Parameter::meaning`]).
+    pub meaning: String,
+    /// Component, location or set-up.
+    pub kind: ParamKind,
+}
+
+/// Names error slot `slot` of `machine` (index in [`Machine::error_slots`] order) as the
+/// catalogue does.
+///
+/// # Panics
+/// When `slot` is not below `machine.n_slots()`.
+///
+/// ```
+/// use mte_errors::catalogue::{ParamKind, slot_name};
+/// use mte_kinematics::Machine;
+/// let m = Machine::library("seed003-ac-table").unwrap();
+/// let s = slot_name(&m, m.slot_index_by_name("C.position.dx").unwrap());
+/// assert_eq!((s.name.as_str(), s.kind), ("EX0C", ParamKind::Location));
+/// assert_eq!(s.label, "location of the C axis line along x");
+/// ```
+pub fn slot_name(machine: &Machine, slot: usize) -> SlotName {
+    let s = machine.error_slots()[slot];
+    let c = s.component.index();
+    let letter = LETTERS[c];
+    let xyz = ["x", "y", "z"][c % 3];
+    let bodies = machine.bodies();
+    let b = &bodies[s.body];
+    let parent_name = b.parent.map(|p| bodies[p].name.clone()).unwrap_or_default();
+    let axis = match b.joint {
+        Joint::Axis(k) => Some(&machine.axes()[k]),
+        Joint::Fixed => None,
+    };
+    match (s.kind, axis) {
+        (SlotKind::Position, Some(a)) if a.kind == AxisKind::Rotary => {
+            let an = &a.name;
+            let (label, meaning) = if c < 3 {
+                (
+                    format!("location of the {an} axis line along {xyz}"),
+                    format!(
+                        "location of the {an} axis line: offset along {xyz} of {an}'s pivot relative to its parent body `{parent_name}`"
+                    ),
+                )
+            } else {
+                (
+                    format!("orientation of the {an} axis line about {xyz}"),
+                    format!(
+                        "orientation of the {an} axis line: tilt about {xyz} relative to its parent body `{parent_name}`"
+                    ),
+                )
+            };
+            SlotName {
+                name: location_error_name(s.component, an),
+                label,
+                meaning,
+                kind: ParamKind::Location,
+            }
+        }
+        (SlotKind::Position, _) => {
+            let tag = axis.map_or(b.name.as_str(), |a| a.name.as_str());
+            let what = if c < 3 {
+                format!("offset along {xyz}")
+            } else {
+                format!("tilt about {xyz}")
+            };
+            let setup = s.body == machine.tool_body() || s.body == machine.workpiece_body();
+            let (label, meaning, kind) = if setup {
+                (
+                    format!("set-up of the {}, {what}", b.name),
+                    format!(
+                        "set-up of the {}: {what} relative to `{parent_name}`",
+                        b.name
+                    ),
+                    ParamKind::Setup,
+                )
+            } else {
+                (
+                    format!("assembly of `{}`, {what}", b.name),
+                    format!("assembly of `{}` on `{parent_name}`: {what}", b.name),
+                    ParamKind::Location,
+                )
+            };
+            SlotName {
+                name: format!("E{letter}0[{tag}]"),
+                label,
+                meaning,
+                kind,
+            }
+        }
+        (SlotKind::Motion, Some(a)) => {
+            let an = &a.name;
+            let own = principal(&a.direction);
+            let what = match (a.kind, c, own) {
+                (AxisKind::Linear, c, Some(o)) if c == o => "positioning error".to_string(),
+                (AxisKind::Linear, c, _) if c < 3 => format!("straightness in {xyz}"),
+                (AxisKind::Linear, c, Some(o)) if c - 3 == o => "roll".to_string(),
+                (AxisKind::Linear, _, _) => {
+                    format!("angular error motion about {xyz} (pitch/yaw)")
+                }
+                (AxisKind::Rotary, c, Some(o)) if c < 3 && c == o => {
+                    "axial error motion".to_string()
+                }
+                (AxisKind::Rotary, c, _) if c < 3 => format!("radial error motion in {xyz}"),
+                (AxisKind::Rotary, c, Some(o)) if c - 3 == o => {
+                    "angular positioning error".to_string()
+                }
+                (AxisKind::Rotary, _, _) => format!("tilt error motion about {xyz}"),
+            };
+            let label = format!("{what} of the {an} axis");
+            let meaning = format!(
+                "{label}: {} of the {an} body relative to `{parent_name}` as {an} moves, in the moved frame",
+                if c < 3 {
+                    format!("displacement along {xyz}")
+                } else {
+                    format!("rotation about {xyz}")
+                }
+            );
+            SlotName {
+                name: format!("E{letter}{an}"),
+                label,
+                meaning,
+                kind: ParamKind::Component,
+            }
+        }
+        (SlotKind::Motion, None) => {
+            let dir = if c < 3 {
+                format!("along {xyz}")
+            } else {
+                format!("about {xyz}")
+            };
+            SlotName {
+                name: format!("E{letter}[{}]", b.name),
+                label: format!("error motion of `{}` {dir}", b.name),
+                meaning: format!(
+                    "error motion of `{}` ({dir}; constant here: no axis turns it)",
+                    b.name
+                ),
+                kind: ParamKind::Component,
+            }
+        }
+    }
+}
+
+/// The papers' aliases of the slot `kind`/`c` of body `bi` (besides its slot name) and the names
+/// of parameters it cannot be told apart from.
+fn slot_aliases(
+    machine: &Machine,
+    bi: usize,
+    kind: SlotKind,
+    c: usize,
+) -> (Vec<String>, Vec<String>) {
+    let bodies = machine.bodies();
+    let axes = machine.axes();
+    let b = &bodies[bi];
+    let axis = match b.joint {
+        Joint::Axis(k) => Some(&axes[k]),
+        Joint::Fixed => None,
+    };
+    let xyz = ["x", "y", "z"][c % 3];
+    match (kind, axis) {
+        (SlotKind::Position, Some(a)) if a.kind == AxisKind::Rotary => {
+            let an = &a.name;
+            let rel = b
+                .parent
+                .filter(|&p| p != 0)
+                .map(|p| match bodies[p].joint {
+                    Joint::Axis(pk) if axes[pk].kind == AxisKind::Rotary => axes[pk].name.clone(),
+                    _ => "M".to_string(),
+                })
+                .unwrap_or_else(|| "M".into());
+            let mut aliases = vec![ibs_location_name(comp_at(c), an)];
+            if c < 3 {
+                aliases.push(format!("δ{xyz}{an}{rel}"));
+            } else {
+                aliases.push(format!("{}{an}{rel}", GREEK[c - 3]));
+            }
+            let mut redundant = vec![];
+            if principal(&a.direction) == Some(c % 3) {
+                // Along / about the axis itself: commutes with the joint rotation.
+                redundant.push(format!("E{}{an}", LETTERS[c]));
+            }
+            (aliases, redundant)
+        }
+        (SlotKind::Position, _) => {
+            let mut redundant = vec![];
+            if let Some(a) = axis
+                && c < 3
+            {
+                redundant.push(format!("E{}{}", LETTERS[c], a.name));
+            }
+            if axis.is_none() && b.motion_errors {
+                redundant.push(format!("E{}[{}]", LETTERS[c], b.name));
+            }
+            (vec![], redundant)
+        }
+        (SlotKind::Motion, Some(a)) => {
+            let an = &a.name;
+            let n = an.to_lowercase();
+            let mut aliases = if c < 3 {
+                vec![
+                    format!("δ{xyz}{n}"),
+                    format!("δ{xyz}({n})"),
+                    format!("d{xyz}({n})"),
+                ]
+            } else {
+                vec![
+                    format!("ε{xyz}{n}"),
+                    format!("ε{xyz}({n})"),
+                    format!("e{xyz}({n})"),
+                ]
+            };
+            if a.kind == AxisKind::Rotary {
+                if c >= 3 {
+                    aliases.push(format!("ε{}(θ{an})", ["yz", "xz", "xy"][c - 3]));
+                } else {
+                    aliases.push(format!("δ{xyz}(θ{an})"));
+                }
+            }
+            (aliases, vec![])
+        }
+        (SlotKind::Motion, None) => (vec![], vec![format!("E{}0[{}]", LETTERS[c], b.name)]),
+    }
+}
+
 impl Catalogue {
     fn from_params(machine: &str, params: Vec<Parameter>) -> Catalogue {
         let mut index = HashMap::new();
@@ -158,206 +455,32 @@ impl Catalogue {
                 Joint::Axis(k) => Some(k),
                 Joint::Fixed => None,
             };
-            let setup = bi == machine.tool_body() || bi == machine.workpiece_body();
-            let parent_name = b.parent.map(|p| bodies[p].name.clone()).unwrap_or_default();
-            // Position slots.
-            for c in 0..6 {
-                let Some(s) = slot(bi, SlotKind::Position, c) else {
-                    continue;
-                };
-                let quantity = if c < 3 { Kind::Length } else { Kind::Angle };
-                let (name, kind, meaning, mut aliases, mut redundant) = match axis {
-                    Some(k) if axes[k].kind == AxisKind::Rotary => {
-                        let an = &axes[k].name;
-                        let own = principal(&axes[k].direction);
-                        let name = format!("E{}0{an}", LETTERS[c]);
-                        let pn = b.parent.filter(|&p| p != 0).map(|p| match bodies[p].joint {
-                            Joint::Axis(pk) if axes[pk].kind == AxisKind::Rotary => {
-                                axes[pk].name.clone()
-                            }
-                            _ => "M".to_string(),
-                        });
-                        let rel = pn.unwrap_or_else(|| "M".into());
-                        let mut al = vec![format!("{}O{an}", LETTERS[c])];
-                        if c < 3 {
-                            al.push(format!("δ{}{an}{rel}", ["x", "y", "z"][c]));
-                        } else {
-                            al.push(format!("{}{an}{rel}", GREEK[c - 3]));
-                        }
-                        let meaning = if c < 3 {
-                            format!(
-                                "location of the {an} axis line: offset along {} of {an}'s pivot relative to its parent body `{parent_name}`",
-                                ["x", "y", "z"][c]
-                            )
-                        } else {
-                            format!(
-                                "orientation of the {an} axis line: tilt about {} relative to its parent body `{parent_name}`",
-                                ["x", "y", "z"][c - 3]
-                            )
-                        };
-                        let mut red = vec![];
-                        if own == Some(c % 3) {
-                            // Along / about the axis itself: commutes with the joint rotation.
-                            red.push(format!("E{}{an}", LETTERS[c]));
-                        }
-                        (name, ParamKind::Location, meaning, al, red)
-                    }
-                    _ => {
-                        let tag = match axis {
-                            Some(k) => axes[k].name.clone(),
-                            None => b.name.clone(),
-                        };
-                        let name = format!("E{}0[{tag}]", LETTERS[c]);
-                        let what = if c < 3 {
-                            format!("offset along {}", ["x", "y", "z"][c])
-                        } else {
-                            format!("tilt about {}", ["x", "y", "z"][c - 3])
-                        };
-                        let meaning = if setup {
-                            format!(
-                                "set-up of the {}: {what} relative to `{parent_name}`",
-                                b.name
-                            )
-                        } else {
-                            format!("assembly of `{}` on `{parent_name}`: {what}", b.name)
-                        };
-                        let mut red = vec![];
-                        if let Some(k) = axis
-                            && c < 3
-                        {
-                            red.push(format!("E{}{}", LETTERS[c], axes[k].name));
-                        }
-                        if axis.is_none() && b.motion_errors {
-                            red.push(format!("E{}[{}]", LETTERS[c], b.name));
-                        }
-                        let kind = if setup {
-                            ParamKind::Setup
-                        } else {
-                            ParamKind::Location
-                        };
-                        (name, kind, meaning, vec![], red)
-                    }
-                };
-                aliases.push(machine.slot_name(s).to_string());
-                redundant.sort();
-                params.push(Parameter {
-                    name,
-                    aliases,
-                    number: None,
-                    kind,
-                    body: bi,
-                    axis,
-                    quantity,
-                    contributions: vec![Contribution {
-                        slot: s,
-                        weight: 1.0,
-                        gain: Gain::One,
-                    }],
-                    meaning,
-                    redundant_with: redundant,
-                });
-            }
-            // Motion slots.
-            for c in 0..6 {
-                let Some(s) = slot(bi, SlotKind::Motion, c) else {
-                    continue;
-                };
-                let quantity = if c < 3 { Kind::Length } else { Kind::Angle };
-                let xyz = ["x", "y", "z"][c % 3];
-                let (name, aliases, meaning, redundant) = match axis {
-                    Some(k) => {
-                        let a = &axes[k];
-                        let an = &a.name;
-                        let n = an.to_lowercase();
-                        let own = principal(&a.direction);
-                        let mut al = if c < 3 {
-                            vec![
-                                format!("δ{xyz}{n}"),
-                                format!("δ{xyz}({n})"),
-                                format!("d{xyz}({n})"),
-                            ]
-                        } else {
-                            vec![
-                                format!("ε{xyz}{n}"),
-                                format!("ε{xyz}({n})"),
-                                format!("e{xyz}({n})"),
-                            ]
-                        };
-                        if a.kind == AxisKind::Rotary {
-                            let planes = ["yz", "xz", "xy"];
-                            if c >= 3 {
-                                al.push(format!("ε{}(θ{an})", planes[c - 3]));
-                            } else {
-                                al.push(format!("δ{xyz}(θ{an})"));
-                            }
-                        }
-                        let what = match (a.kind, c, own) {
-                            (AxisKind::Linear, c, Some(o)) if c == o => {
-                                "positioning error".to_string()
-                            }
-                            (AxisKind::Linear, c, _) if c < 3 => format!("straightness in {xyz}"),
-                            (AxisKind::Linear, c, Some(o)) if c - 3 == o => "roll".to_string(),
-                            (AxisKind::Linear, _, _) => {
-                                format!("angular error motion about {xyz} (pitch/yaw)")
-                            }
-                            (AxisKind::Rotary, c, Some(o)) if c < 3 && c == o => {
-                                "axial error motion".to_string()
-                            }
-                            (AxisKind::Rotary, c, _) if c < 3 => {
-                                format!("radial error motion in {xyz}")
-                            }
-                            (AxisKind::Rotary, c, Some(o)) if c - 3 == o => {
-                                "angular positioning error".to_string()
-                            }
-                            (AxisKind::Rotary, _, _) => format!("tilt error motion about {xyz}"),
-                        };
-                        let meaning = format!(
-                            "{what} of the {an} axis: {} of the {an} body relative to `{parent_name}` as {an} moves, in the moved frame",
-                            if c < 3 {
-                                format!("displacement along {xyz}")
-                            } else {
-                                format!("rotation about {xyz}")
-                            }
-                        );
-                        (format!("E{}{an}", LETTERS[c]), al, meaning, vec![])
-                    }
-                    None => {
-                        let name = format!("E{}[{}]", LETTERS[c], b.name);
-                        let meaning = format!(
-                            "error motion of `{}` ({}; constant here: no axis turns it)",
-                            b.name,
-                            if c < 3 {
-                                format!("along {xyz}")
-                            } else {
-                                format!("about {xyz}")
-                            }
-                        );
-                        (
-                            name,
-                            vec![],
-                            meaning,
-                            vec![format!("E{}0[{}]", LETTERS[c], b.name)],
-                        )
-                    }
-                };
-                let mut aliases = aliases;
-                aliases.push(machine.slot_name(s).to_string());
-                params.push(Parameter {
-                    name,
-                    aliases,
-                    number: None,
-                    kind: ParamKind::Component,
-                    body: bi,
-                    axis,
-                    quantity,
-                    contributions: vec![Contribution {
-                        slot: s,
-                        weight: 1.0,
-                        gain: Gain::One,
-                    }],
-                    meaning,
-                    redundant_with: redundant,
-                });
+            for kind in [SlotKind::Position, SlotKind::Motion] {
+                for c in 0..6 {
+                    let Some(s) = slot(bi, kind, c) else {
+                        continue;
+                    };
+                    let named = slot_name(machine, s);
+                    let (mut aliases, mut redundant) = slot_aliases(machine, bi, kind, c);
+                    aliases.push(machine.slot_name(s).to_string());
+                    redundant.sort();
+                    params.push(Parameter {
+                        name: named.name,
+                        aliases,
+                        number: None,
+                        kind: named.kind,
+                        body: bi,
+                        axis,
+                        quantity: if c < 3 { Kind::Length } else { Kind::Angle },
+                        contributions: vec![Contribution {
+                            slot: s,
+                            weight: 1.0,
+                            gain: Gain::One,
+                        }],
+                        meaning: named.meaning,
+                        redundant_with: redundant,
+                    });
+                }
             }
         }
         // Redundancy is symmetric: location along/about a rotary axis ↔ its constant component.
@@ -416,7 +539,7 @@ impl Catalogue {
                         });
                     }
                 }
-                let name = format!("E{}0{}", LETTERS[3 + n_i], a.name);
+                let name = location_error_name(comp_at(3 + n_i), &a.name);
                 let plane = match (dir_i, n_i) {
                     (1, 2) => "Sxy",
                     (2, 0) => "Syz",

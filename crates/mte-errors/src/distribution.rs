@@ -1,198 +1,56 @@
-//! Probability distributions of error parameters, for Monte Carlo sampling.
+//! Probability distributions of error parameters, for Monte Carlo sampling: the workspace's one
+//! [`Distribution`] (defined in `mte-sensitivity`, re-exported here), and the error-set file's
+//! tolerance form "±t at kσ".
 
 use crate::error::{Result, invalid};
-use mte_linalg::stats::{normal_cdf, normal_quantile};
-use rand::Rng;
+pub use mte_sensitivity::Distribution;
 
-/// Distribution of one error parameter (internal units, mm or rad).
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub enum Distribution {
-    /// Normal N(mean, sd²).
-    Normal {
-        /// Mean.
-        mean: f64,
-        /// Standard deviation (> 0).
-        sd: f64,
-    },
-    /// Uniform on [low, high].
-    Uniform {
-        /// Lower bound.
-        low: f64,
-        /// Upper bound (> low).
-        high: f64,
-    },
-    /// Normal N(mean, sd²) restricted to [low, high], sampled exactly by inverting the CDF.
-    TruncatedNormal {
-        /// Mean of the parent normal.
-        mean: f64,
-        /// Standard deviation of the parent normal.
-        sd: f64,
-        /// Lower bound.
-        low: f64,
-        /// Upper bound.
-        high: f64,
-    },
+/// A normal distribution from a tolerance "±t at kσ": `sd = t/k`, mean 0; truncated at ±t
+/// when `truncate` is true.
+///
+/// ```
+/// let d = mte_errors::distribution::from_tolerance(0.015, 3.0, false).unwrap();
+/// assert!((d.sd() - 0.005).abs() < 1e-15);
+/// ```
+///
+/// # Errors
+/// [`crate::Error::Invalid`] for t ≤ 0 or k ≤ 0.
+pub fn from_tolerance(tolerance: f64, sigma_level: f64, truncate: bool) -> Result<Distribution> {
+    if !(tolerance.is_finite() && tolerance > 0.0 && sigma_level.is_finite() && sigma_level > 0.0) {
+        return Err(invalid(
+            "tolerance distribution",
+            format!("tolerance {tolerance} and sigma level {sigma_level} must be > 0"),
+        ));
+    }
+    let sd = tolerance / sigma_level;
+    let d = if truncate {
+        Distribution::TruncatedNormal {
+            mean: 0.0,
+            sd,
+            lo: -tolerance,
+            hi: tolerance,
+        }
+    } else {
+        Distribution::Normal { mean: 0.0, sd }
+    };
+    validate(&d, "tolerance")?;
+    Ok(d)
 }
 
-impl Distribution {
-    /// A normal distribution from a tolerance "±t at kσ": `sd = t/k`, mean 0; truncated at ±t
-    /// when `truncate` is true.
-    ///
-    /// # Errors
-    /// [`crate::Error::Invalid`] for t ≤ 0 or k ≤ 0.
-    pub fn from_tolerance(
-        tolerance: f64,
-        sigma_level: f64,
-        truncate: bool,
-    ) -> Result<Distribution> {
-        if !(tolerance.is_finite()
-            && tolerance > 0.0
-            && sigma_level.is_finite()
-            && sigma_level > 0.0)
-        {
-            return Err(invalid(
-                "tolerance distribution",
-                format!("tolerance {tolerance} and sigma level {sigma_level} must be > 0"),
-            ));
-        }
-        let sd = tolerance / sigma_level;
-        let d = if truncate {
-            Distribution::TruncatedNormal {
-                mean: 0.0,
-                sd,
-                low: -tolerance,
-                high: tolerance,
-            }
-        } else {
-            Distribution::Normal { mean: 0.0, sd }
-        };
-        d.validate()?;
-        Ok(d)
-    }
-
-    /// Check the parameters.
-    ///
-    /// # Errors
-    /// [`crate::Error::Invalid`] for a non-positive sd, empty interval, non-finite values, or a
-    /// truncation interval holding less than 1e-12 of the parent normal's probability.
-    pub fn validate(&self) -> Result<()> {
-        let fin = |v: &[f64]| v.iter().all(|x| x.is_finite());
-        match *self {
-            Distribution::Normal { mean, sd } => {
-                if !fin(&[mean, sd]) || sd <= 0.0 {
-                    return Err(invalid(
-                        "normal distribution",
-                        format!("sd = {sd} must be > 0, mean = {mean} finite"),
-                    ));
-                }
-            }
-            Distribution::Uniform { low, high } => {
-                if !fin(&[low, high]) || high <= low {
-                    return Err(invalid(
-                        "uniform distribution",
-                        format!("need low < high, got [{low}, {high}]"),
-                    ));
-                }
-            }
-            Distribution::TruncatedNormal {
-                mean,
-                sd,
-                low,
-                high,
-            } => {
-                if !fin(&[mean, sd, low, high]) || sd <= 0.0 || high <= low {
-                    return Err(invalid(
-                        "truncated normal distribution",
-                        format!("need sd > 0 and low < high, got sd = {sd}, [{low}, {high}]"),
-                    ));
-                }
-                let (pa, pb) = self.tail_probs();
-                if pb - pa < 1e-12 {
-                    return Err(invalid(
-                        "truncated normal distribution",
-                        format!(
-                            "the interval [{low}, {high}] holds only {:.1e} of N({mean}, {sd}²)",
-                            pb - pa
-                        ),
-                    ));
-                }
-            }
-        }
-        Ok(())
-    }
-
-    /// For the truncated normal: Φ of the standardised bounds, in the lower tail (mirrored when
-    /// both bounds are above the mean, for accuracy).
-    fn tail_probs(&self) -> (f64, f64) {
-        if let Distribution::TruncatedNormal {
-            mean,
-            sd,
-            low,
-            high,
-        } = *self
-        {
-            let (a, b) = ((low - mean) / sd, (high - mean) / sd);
-            if a > 0.0 {
-                (normal_cdf(-b), normal_cdf(-a))
-            } else {
-                (normal_cdf(a), normal_cdf(b))
-            }
-        } else {
-            (0.0, 1.0)
-        }
-    }
-
-    /// Draw one value.
-    pub fn sample<R: Rng + ?Sized>(&self, rng: &mut R) -> f64 {
-        match *self {
-            Distribution::Normal { mean, sd } => {
-                let z: f64 = rng.sample(rand_distr::StandardNormal);
-                mean + sd * z
-            }
-            Distribution::Uniform { low, high } => low + (high - low) * rng.random::<f64>(),
-            Distribution::TruncatedNormal {
-                mean,
-                sd,
-                low,
-                high,
-            } => {
-                let a = (low - mean) / sd;
-                let (pa, pb) = self.tail_probs();
-                let u: f64 = rng.random();
-                let p = (pa + u * (pb - pa)).clamp(f64::MIN_POSITIVE, 1.0 - f64::EPSILON);
-                let z = normal_quantile(p);
-                let z = if a > 0.0 { -z } else { z };
-                (mean + sd * z).clamp(low, high)
-            }
-        }
-    }
-
-    /// Nominal value used when not sampling: the mean (normal), the midpoint (uniform), the
-    /// parent mean clamped into the interval (truncated normal).
-    pub fn nominal(&self) -> f64 {
-        match *self {
-            Distribution::Normal { mean, .. } => mean,
-            Distribution::Uniform { low, high } => 0.5 * (low + high),
-            Distribution::TruncatedNormal {
-                mean, low, high, ..
-            } => mean.clamp(low, high),
-        }
-    }
-
-    /// Standard deviation of the distribution. For the truncated normal this is the truncated
-    /// law's (±1σ truncation: 0.54 of the parent's), not the parent's `sd` field.
-    pub fn sd(&self) -> f64 {
-        match *self {
-            Distribution::Normal { sd, .. } => sd,
-            Distribution::Uniform { low, high } => (high - low) / 12f64.sqrt(),
-            Distribution::TruncatedNormal {
-                mean,
-                sd,
-                low,
-                high,
-            } => mte_linalg::stats::truncated_normal_moments(mean, sd, low, high).1,
-        }
-    }
+/// Checks a distribution's parameters ([`Distribution::validate`]), as this crate's error;
+/// `what` names the distribution's type.
+///
+/// # Errors
+/// [`crate::Error::Invalid`] for a non-positive sd, an empty interval, non-finite values, or a
+/// truncation interval holding (almost) none of the parent normal's probability.
+pub fn validate(d: &Distribution, what: &str) -> Result<()> {
+    d.validate(what).map_err(|e| match e {
+        mte_sensitivity::Error::InvalidInput { field, message, .. } => invalid(
+            format!("{what} distribution"),
+            format!("field `{field}`: {message}"),
+        ),
+        e => invalid(format!("{what} distribution"), e.to_string()),
+    })
 }
 
 #[cfg(test)]
@@ -220,13 +78,7 @@ mod tests {
             (m - 1.0).abs() < 5.0 * 2.0 / 200.0 && (s - 2.0).abs() < 5.0 * 2.0 / 283.0,
             "{m} {s}"
         );
-        let (m, s, lo, hi) = moments(
-            &Distribution::Uniform {
-                low: -3.0,
-                high: 1.0,
-            },
-            n,
-        );
+        let (m, s, lo, hi) = moments(&Distribution::Uniform { lo: -3.0, hi: 1.0 }, n);
         assert!(
             (m + 1.0).abs() < 0.03
                 && (s - 4.0 / 12f64.sqrt()).abs() < 0.03
@@ -234,7 +86,7 @@ mod tests {
                 && hi <= 1.0
         );
         // Truncated at ±1σ: variance = 1 − 2φ(1)/(2Φ(1) − 1) = 0.29112 (standard formula), sd 0.53956.
-        let d = Distribution::from_tolerance(15e-3, 1.0, true).unwrap();
+        let d = from_tolerance(15e-3, 1.0, true).unwrap();
         let (m, s, lo, hi) = moments(&d, n);
         assert!(m.abs() < 5.0 * 15e-3 * 0.54 / 200.0, "{m}");
         assert!((s / 15e-3 - 0.53956).abs() < 0.01, "{}", s / 15e-3);
@@ -245,8 +97,8 @@ mod tests {
         let d = Distribution::TruncatedNormal {
             mean: 0.0,
             sd: 1.0,
-            low: 3.0,
-            high: 4.0,
+            lo: 3.0,
+            hi: 4.0,
         };
         let (m, s, lo, hi) = moments(&d, n);
         assert!(lo >= 3.0 && hi <= 4.0 && (m - 3.26045).abs() < 0.006, "{m}");
@@ -255,33 +107,21 @@ mod tests {
 
     #[test]
     fn invalid_parameters() {
+        assert!(validate(&Distribution::Normal { mean: 0.0, sd: 0.0 }, "normal").is_err());
+        assert!(validate(&Distribution::Uniform { lo: 1.0, hi: 1.0 }, "uniform").is_err());
         assert!(
-            Distribution::Normal { mean: 0.0, sd: 0.0 }
-                .validate()
-                .is_err()
-        );
-        assert!(
-            Distribution::Uniform {
-                low: 1.0,
-                high: 1.0
-            }
-            .validate()
+            validate(
+                &Distribution::TruncatedNormal {
+                    mean: 0.0,
+                    sd: 1.0,
+                    lo: 50.0,
+                    hi: 51.0
+                },
+                "truncated_normal"
+            )
             .is_err()
         );
-        assert!(
-            Distribution::TruncatedNormal {
-                mean: 0.0,
-                sd: 1.0,
-                low: 50.0,
-                high: 51.0
-            }
-            .validate()
-            .is_err()
-        );
-        assert!(Distribution::from_tolerance(-1.0, 3.0, false).is_err());
-        assert_eq!(
-            Distribution::from_tolerance(15.0, 3.0, false).unwrap().sd(),
-            5.0
-        );
+        assert!(from_tolerance(-1.0, 3.0, false).is_err());
+        assert_eq!(from_tolerance(15.0, 3.0, false).unwrap().sd(), 5.0);
     }
 }

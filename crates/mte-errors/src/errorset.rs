@@ -775,8 +775,8 @@ fn parse_distribution(
         "uniform" => {
             p.check_keys(m, path, &["type", "low", "high"])?;
             Distribution::Uniform {
-                low: q("low", true)?.unwrap_or(0.0),
-                high: q("high", true)?.unwrap_or(0.0),
+                lo: q("low", true)?.unwrap_or(0.0),
+                hi: q("high", true)?.unwrap_or(0.0),
             }
         }
         "truncated_normal" => {
@@ -784,8 +784,8 @@ fn parse_distribution(
             Distribution::TruncatedNormal {
                 mean: q("mean", false)?.unwrap_or(0.0),
                 sd: q("sd", true)?.unwrap_or(0.0),
-                low: q("low", true)?.unwrap_or(0.0),
-                high: q("high", true)?.unwrap_or(0.0),
+                lo: q("low", true)?.unwrap_or(0.0),
+                hi: q("high", true)?.unwrap_or(0.0),
             }
         }
         "tolerance" => {
@@ -805,7 +805,7 @@ fn parse_distribution(
                     ));
                 }
             };
-            Distribution::from_tolerance(t, k, tr).map_err(|e| rename(e, path))?
+            crate::distribution::from_tolerance(t, k, tr).map_err(|e| rename(e, path))?
         }
         other => {
             return Err(p.err(
@@ -816,7 +816,7 @@ fn parse_distribution(
             ));
         }
     };
-    d.validate().map_err(|e| rename(e, path))?;
+    crate::distribution::validate(&d, ty).map_err(|e| rename(e, path))?;
     Ok(d)
 }
 

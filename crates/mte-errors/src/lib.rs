@@ -7,6 +7,7 @@ mod error;
 pub mod errorset;
 pub mod evaluator;
 pub mod models;
+pub mod pose_model;
 pub mod units;
 pub mod volumetric;
 

@@ -43,6 +43,16 @@ pub enum KinError {
         /// The bundled names, comma separated.
         known: String,
     },
+    /// A name is neither a bundled machine nor an existing machine file.
+    #[error("`{name}` is neither a library machine ({known}) nor an existing file ({path})")]
+    NoSuchMachine {
+        /// The requested name.
+        name: String,
+        /// The file it was looked for at.
+        path: String,
+        /// The bundled names, comma separated.
+        known: String,
+    },
     /// The requested tool pose is not reachable by the machine's kinematics (not a stroke issue).
     #[error("unreachable pose: {reason}")]
     Unreachable {

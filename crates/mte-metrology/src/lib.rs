@@ -8,7 +8,6 @@ pub mod gum;
 pub mod io;
 pub mod iso230_2;
 pub mod network;
-pub mod reproduce;
 pub mod simulate;
 pub mod stats;
 pub mod uncertainty;

@@ -8,7 +8,6 @@ mod kin;
 pub mod model;
 pub mod names;
 pub mod program;
-pub mod reproduce;
 pub mod simulate;
 pub mod thermal;
 

@@ -1,5 +1,6 @@
 //! ISO 230-1 names of the constant (location and squareness) errors the R-test identifies, the
 //! IBS/ISO 10791-6 report names (XOB, ZOB, AOB, COB; XOC, YOC, AOC, BOC …), and their slots.
+//! The names are `mte-errors`' ([`mte_errors::catalogue`]); this module finds their slots.
 //!
 //! A name `E<c>0<axis>` means the constant error of component `<c>` (X, Y, Z: translation;
 //! A, B, C: rotation about X, Y, Z) of the body moved by `<axis>`, relative to its parent body,
@@ -8,7 +9,11 @@
 
 use crate::error::{Result, RtestError};
 use crate::kin;
-use mte_kinematics::{Component, Machine};
+use mte_errors::catalogue::{
+    SQUARENESS_NAMES, component_of_letter, ibs_location_name, location_error_name,
+    parse_location_error_name, rotary_location_components,
+};
+use mte_kinematics::Machine;
 use serde::{Deserialize, Serialize};
 
 /// A named constant error and its slot.
@@ -24,18 +29,6 @@ pub struct NamedSlot {
     pub angular: bool,
 }
 
-fn component(c: char) -> Option<(Component, bool)> {
-    Some(match c {
-        'X' => (Component::Dx, false),
-        'Y' => (Component::Dy, false),
-        'Z' => (Component::Dz, false),
-        'A' => (Component::Ex, true),
-        'B' => (Component::Ey, true),
-        'C' => (Component::Ez, true),
-        _ => return None,
-    })
-}
-
 /// Looks up `E<c>0<axis>` on a machine.
 ///
 /// # Errors
@@ -46,26 +39,29 @@ pub fn slot_by_name(m: &Machine, name: &str) -> Result<NamedSlot> {
         name: name.into(),
         message: msg.into(),
     };
-    let chars: Vec<char> = name.chars().collect();
-    if chars.len() < 4 || chars[0] != 'E' || chars[2] != '0' {
-        return Err(bad(
-            "expected an ISO 230-1 constant error name E<X|Y|Z|A|B|C>0<axis>, e.g. EX0B, EA0Y",
-        ));
-    }
-    let (c, angular) = component(chars[1])
-        .ok_or_else(|| bad("second letter must be X, Y, Z (translation) or A, B, C (rotation)"))?;
-    let axis: String = chars[3..].iter().collect();
-    if m.axis_index(&axis).is_none() {
+    let (c, axis) = parse_location_error_name(name).ok_or_else(|| {
+        let letter_ok = name
+            .chars()
+            .nth(1)
+            .is_some_and(|l| component_of_letter(l).is_some());
+        if name.starts_with('E') && !letter_ok {
+            bad("second letter must be X, Y, Z (translation) or A, B, C (rotation)")
+        } else {
+            bad("expected an ISO 230-1 constant error name E<X|Y|Z|A|B|C>0<axis>, e.g. EX0B, EA0Y")
+        }
+    })?;
+    let angular = c.index() >= 3;
+    if m.axis_index(axis).is_none() {
         return Err(kin::unknown_axis(
             m,
-            &axis,
+            axis,
             &format!("in parameter `{name}`"),
         ));
     }
-    let slot = kin::position_slot(m, &axis, c)
+    let slot = kin::position_slot(m, axis, c)
         .ok_or_else(|| bad("the machine has no constant error slot for this component"))?;
     let rotary = kin::axes(m).iter().any(|a| a.name == axis && a.rotary);
-    let ibs = rotary.then(|| format!("{}O{}", chars[1], axis));
+    let ibs = rotary.then(|| ibs_location_name(c, axis));
     Ok(NamedSlot {
         iso: name.into(),
         ibs,
@@ -82,20 +78,15 @@ pub fn slot_by_name(m: &Machine, name: &str) -> Result<NamedSlot> {
 pub fn location_errors(m: &Machine) -> Result<Vec<NamedSlot>> {
     let mut out = Vec::new();
     for a in kin::axes(m).iter().filter(|a| a.rotary) {
-        let names: [&str; 4] = match a.name.as_str() {
-            "A" => ["EY0A", "EZ0A", "EB0A", "EC0A"],
-            "B" => ["EX0B", "EZ0B", "EA0B", "EC0B"],
-            "C" => ["EX0C", "EY0C", "EA0C", "EB0C"],
-            other => {
-                return Err(kin::unknown_axis(
-                    m,
-                    other,
-                    "rotary axes must be named A, B or C to name their location errors",
-                ));
-            }
-        };
-        for n in names {
-            out.push(slot_by_name(m, n)?);
+        let components = rotary_location_components(&a.name).ok_or_else(|| {
+            kin::unknown_axis(
+                m,
+                &a.name,
+                "rotary axes must be named A, B or C to name their location errors",
+            )
+        })?;
+        for c in components {
+            out.push(slot_by_name(m, &location_error_name(c, &a.name))?);
         }
     }
     Ok(out)
@@ -107,7 +98,7 @@ pub fn location_errors(m: &Machine) -> Result<Vec<NamedSlot>> {
 /// # Errors
 /// [`RtestError::UnknownAxis`] when the machine lacks X, Y or Z.
 pub fn squareness_errors(m: &Machine) -> Result<Vec<NamedSlot>> {
-    ["EC0Y", "EB0Z", "EA0Z"]
+    SQUARENESS_NAMES
         .iter()
         .map(|n| slot_by_name(m, n))
         .collect()

@@ -4,6 +4,7 @@
 use crate::error::{Error, Result};
 use crate::special::{norm_cdf, norm_ppf, norm_ppf_fast};
 use mte_linalg::stats::truncated_normal_moments;
+use rand::Rng;
 use serde::{Deserialize, Serialize};
 use serde_json::Value;
 
@@ -165,18 +166,75 @@ impl Distribution {
                         format!("must be greater than lo, got lo = {lo}, hi = {hi}"),
                     );
                 }
-                let (a, b) = (norm_cdf((lo - mean) / sd), norm_cdf((hi - mean) / sd));
-                if b - a < 1e-14 {
+                let (pa, pb) = self.tail_probs();
+                if pb - pa < 1e-12 {
                     return bad(
                         "lo/hi",
                         format!(
-                            "interval [{lo}, {hi}] carries no probability under N({mean}, {sd}²)"
+                            "interval [{lo}, {hi}] carries no probability under N({mean}, {sd}²) (only {:.1e})",
+                            pb - pa
                         ),
                     );
                 }
             }
         }
         Ok(())
+    }
+
+    /// For the truncated normal: Φ of the standardised bounds, in the lower tail (mirrored when
+    /// both bounds are above the mean, for accuracy); (0, 1) otherwise.
+    fn tail_probs(&self) -> (f64, f64) {
+        if let Distribution::TruncatedNormal { mean, sd, lo, hi } = *self {
+            let (a, b) = ((lo - mean) / sd, (hi - mean) / sd);
+            if a > 0.0 {
+                (norm_cdf(-b), norm_cdf(-a))
+            } else {
+                (norm_cdf(a), norm_cdf(b))
+            }
+        } else {
+            (0.0, 1.0)
+        }
+    }
+
+    /// Draws one value from `rng` (Monte Carlo of error sets): a standard normal draw scaled,
+    /// a uniform draw, or the truncated normal by inverting its CDF in the accurate tail.
+    ///
+    /// ```
+    /// use mte_sensitivity::Distribution;
+    /// use rand::SeedableRng;
+    /// let d = Distribution::truncated_normal(0.0, 1.0, 3.0, 4.0).unwrap();
+    /// let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(1);
+    /// let x = d.sample(&mut rng);
+    /// assert!((3.0..=4.0).contains(&x));
+    /// ```
+    pub fn sample<R: Rng + ?Sized>(&self, rng: &mut R) -> f64 {
+        match *self {
+            Distribution::Normal { mean, sd } => {
+                let z: f64 = rng.sample(rand_distr::StandardNormal);
+                mean + sd * z
+            }
+            Distribution::Uniform { lo, hi } => lo + (hi - lo) * rng.random::<f64>(),
+            Distribution::TruncatedNormal { mean, sd, lo, hi } => {
+                let a = (lo - mean) / sd;
+                let (pa, pb) = self.tail_probs();
+                let u: f64 = rng.random();
+                let p = (pa + u * (pb - pa)).clamp(f64::MIN_POSITIVE, 1.0 - f64::EPSILON);
+                let z = norm_ppf(p);
+                let z = if a > 0.0 { -z } else { z };
+                (mean + sd * z).clamp(lo, hi)
+            }
+        }
+    }
+
+    /// Nominal value used when not sampling: the mean (normal), the midpoint (uniform), the
+    /// parent mean clamped into the interval (truncated normal; not the truncated law's mean,
+    /// see [`Distribution::mean`]).
+    pub fn nominal(&self) -> f64 {
+        match *self {
+            Distribution::Normal { mean, .. } => mean,
+            Distribution::Uniform { lo, hi } => 0.5 * (lo + hi),
+            Distribution::TruncatedNormal { mean, lo, hi, .. } => mean.clamp(lo, hi),
+        }
     }
 
     /// Mean of the distribution.
@@ -190,7 +248,8 @@ impl Distribution {
         }
     }
 
-    /// Standard deviation of the distribution.
+    /// Standard deviation of the distribution. For the truncated normal this is the truncated
+    /// law's (±1σ truncation: 0.54 of the parent's), not the parent's `sd` field.
     pub fn sd(&self) -> f64 {
         match *self {
             Distribution::Normal { sd, .. } => sd,

@@ -1,7 +1,6 @@
 #![doc = include_str!("../README.md")]
 
 pub mod plot;
-pub mod pose_model;
 pub mod report;
 
 /// Everything that can go wrong in a command: the message names the file, line or field.

@@ -1,7 +1,7 @@
 //! `mte sensitivity` on a machine and an error set: the bundled fixture run end to end (small N)
 //! against the library's analytic indices, and bad problem files.
 
-use mte::pose_model::{Linearisation, PoseErrorModel, diagonal_points};
+use mte_errors::pose_model::{Linearisation, PoseErrorModel, diagonal_points};
 use mte_errors::{Catalogue, ErrorSet};
 use mte_kinematics::Machine;
 use serde_json::Value;

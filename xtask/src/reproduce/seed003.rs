@@ -13,8 +13,8 @@
 //!   direction, of its S_T from the analytic S_T of the first-order model.
 
 use super::ReproduceError;
-use mte::pose_model::{Linearisation, PoseErrorModel, diagonal_points};
 use mte_errors::Catalogue;
+use mte_errors::pose_model::{Linearisation, PoseErrorModel, diagonal_points};
 use mte_errors::units::Kind;
 use mte_kinematics::Machine;
 use mte_sensitivity::pce::{PceParams, build_pce, sample_runs};

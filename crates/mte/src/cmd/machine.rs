@@ -4,7 +4,7 @@ use std::fmt::Write;
 use std::path::Path;
 
 use mte::CliError;
-use mte_kinematics::{AxisKind, Branch, Joint, Machine, SlotKind};
+use mte_kinematics::{AxisKind, Branch, Joint, KinError, Machine, SlotKind};
 
 /// Arguments of `mte machine`.
 #[derive(clap::Args)]
@@ -15,7 +15,7 @@ pub struct Args {
 
 #[derive(clap::Subcommand)]
 enum Sub {
-    /// List the bundled machines (fixtures/machines/*.json).
+    /// List the bundled machines (crates/mte-kinematics/machines/*.json).
     List,
     /// Show a machine: axes, topology, lower-order body array, error slots.
     Show {
@@ -46,18 +46,13 @@ pub fn run(args: &Args) -> Result<(), CliError> {
     }
 }
 
-/// A library name or a file path.
+/// A library name or a file path ([`Machine::library_or_file`]); an unknown name is a usage
+/// error.
 pub fn load(name_or_file: &str) -> Result<Machine, CliError> {
-    if Machine::library_names().contains(&name_or_file) {
-        Machine::library(name_or_file).map_err(|e| CliError::Library(e.to_string()))
-    } else if Path::new(name_or_file).exists() {
-        Machine::from_file(Path::new(name_or_file)).map_err(|e| CliError::Library(e.to_string()))
-    } else {
-        Err(CliError::Usage(format!(
-            "`{name_or_file}` is neither a library machine ({}) nor an existing file",
-            Machine::library_names().join(", ")
-        )))
-    }
+    Machine::library_or_file(name_or_file, Path::new("")).map_err(|e| match e {
+        KinError::NoSuchMachine { .. } => CliError::Usage(e.to_string()),
+        e => CliError::Library(e.to_string()),
+    })
 }
 
 fn list() -> Result<String, CliError> {

@@ -297,12 +297,8 @@ pub fn run(args: &Args) -> Result<(), CliError> {
             let mname = v.get("machine").and_then(|x| x.as_str()).ok_or_else(|| {
                 CliError::Library(format!("{}: missing field `machine`", manifest.display()))
             })?;
-            let mpath = manifest.parent().unwrap_or(Path::new(".")).join(mname);
-            let m = if mpath.is_file() {
-                Machine::from_file(&mpath).map_err(lib)?
-            } else {
-                Machine::library(mname).map_err(lib)?
-            };
+            let dir = manifest.parent().unwrap_or(Path::new("."));
+            let m = Machine::library_or_file(mname, dir).map_err(lib)?;
             let ds = read_dataset(manifest, &rotary(&m)).map_err(lib)?;
             let mut spec = FitSpec::pivots(&m).map_err(lib)?;
             if *squareness {

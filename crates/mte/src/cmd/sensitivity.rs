@@ -10,7 +10,7 @@ use clap::{Args as ClapArgs, ValueEnum};
 use indicatif::{ProgressBar, ProgressDrawTarget};
 use mte::CliError;
 use mte::plot::{Axis, Interval, error_bar_chart};
-use mte::pose_model::{
+use mte_errors::pose_model::{
     COMPONENTS, Linearisation, PoseErrorModel, PoseModelError, diagonal_points, generalised_index,
     point_from_mm_deg, points_from_csv,
 };

@@ -1,8 +1,8 @@
 //! The pose-error sensitivity model: its first-order map against central differences of the
 //! exact pose error, and its input errors.
 
-use mte::pose_model::{Linearisation, PoseErrorModel, PoseModelError};
 use mte_errors::Catalogue;
+use mte_errors::pose_model::{Linearisation, PoseErrorModel, PoseModelError};
 use mte_kinematics::Machine;
 use mte_sensitivity::Model;
 
@@ -102,9 +102,9 @@ fn bad_points_give_clear_errors() {
 
 // ---- Error-set models: random entries as inputs, fixed entries held ----
 
-use mte::pose_model::{diagonal_points, generalised_index};
 use mte_errors::distribution::Distribution as ErrDist;
 use mte_errors::errorset::ModelSpec;
+use mte_errors::pose_model::{diagonal_points, generalised_index};
 use mte_errors::units::Kind;
 use mte_errors::{AxisState, ErrorSet, Evaluator};
 use mte_sensitivity::sobol::{SobolParams, sobol};
@@ -127,8 +127,8 @@ fn error_set() -> ErrorSet {
         .with_distribution(
             "EYY",
             ErrDist::Uniform {
-                low: -8.0 * um,
-                high: 4.0 * um,
+                lo: -8.0 * um,
+                hi: 4.0 * um,
             },
             Kind::Length,
         )
@@ -145,8 +145,8 @@ fn error_set() -> ErrorSet {
             ErrDist::TruncatedNormal {
                 mean: 0.0,
                 sd: 4.0 * um,
-                low: -6.0 * um,
-                high: 6.0 * um,
+                lo: -6.0 * um,
+                hi: 6.0 * um,
             },
             Kind::Length,
         )
@@ -169,8 +169,8 @@ fn error_set() -> ErrorSet {
         .with_distribution(
             "ECZ",
             ErrDist::Uniform {
-                low: -5.0 * arcsec,
-                high: 5.0 * arcsec,
+                lo: -5.0 * arcsec,
+                hi: 5.0 * arcsec,
             },
             Kind::Angle,
         )
@@ -195,14 +195,9 @@ fn variance(d: ErrDist) -> f64 {
     let pdf = |z: f64| (-0.5 * z * z).exp() / (2.0 * std::f64::consts::PI).sqrt();
     match d {
         ErrDist::Normal { sd, .. } => sd * sd,
-        ErrDist::Uniform { low, high } => (high - low).powi(2) / 12.0,
-        ErrDist::TruncatedNormal {
-            mean,
-            sd,
-            low,
-            high,
-        } => {
-            let (a, b) = ((low - mean) / sd, (high - mean) / sd);
+        ErrDist::Uniform { lo, hi } => (hi - lo).powi(2) / 12.0,
+        ErrDist::TruncatedNormal { mean, sd, lo, hi } => {
+            let (a, b) = ((lo - mean) / sd, (hi - mean) / sd);
             let z = normal_cdf(b) - normal_cdf(a);
             let r = (pdf(a) - pdf(b)) / z;
             sd * sd * (1.0 + (a * pdf(a) - b * pdf(b)) / z - r * r)
@@ -475,7 +470,7 @@ fn seed003_tolerance_fixture_is_the_study() {
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("../../fixtures/errors/seed003-tolerances.json");
     let set = mte_errors::ErrorSet::from_file(&path).unwrap();
-    let points = mte::pose_model::diagonal_points(&m, 5).unwrap();
+    let points = mte_errors::pose_model::diagonal_points(&m, 5).unwrap();
     let (problem, model) = PoseErrorModel::from_error_set(
         &m,
         &Catalogue::for_machine(&m),

@@ -7,13 +7,12 @@
 //! their distributions; its fixed entries — constants or position-dependent models — are held at
 //! their values). Test points: an explicit list, [`points_from_csv`] or [`diagonal_points`].
 //!
-//! This adapter lives here because `mte-sensitivity` knows nothing of machines and `mte-errors`
-//! does not depend on `mte-sensitivity`.
+//! This adapter lives here because `mte-sensitivity` knows nothing of machines; error sets and
+//! the sensitivity methods share one [`Distribution`](mte_sensitivity::Distribution).
 
-use mte_errors::distribution::Distribution as ErrorDistribution;
-use mte_errors::errorset::ModelSpec;
-use mte_errors::evaluator::AxisState;
-use mte_errors::{Catalogue, ErrorSet, Evaluator};
+use crate::errorset::ModelSpec;
+use crate::evaluator::AxisState;
+use crate::{Catalogue, ErrorSet, Evaluator};
 use mte_kinematics::{AxisKind, Machine};
 use mte_linalg::bridge;
 use mte_linalg::csv::{CsvError, CsvTable};
@@ -21,7 +20,7 @@ use mte_linalg::faer::linalg::matmul::matmul;
 use mte_linalg::faer::{Accum, MatMut, MatRef, Par};
 use mte_linalg::nalgebra::DMatrixView;
 use mte_linalg::{DMat, DVec};
-use mte_sensitivity::{Distribution, Input, Model, Problem};
+use mte_sensitivity::{Input, Model, Problem};
 
 /// Names of the six pose-error components, in output order: position x, y, z and orientation
 /// (rotation vector) x, y, z — the seed 003 paper's P and V directions.
@@ -64,7 +63,7 @@ pub enum PoseModelError {
     NoPoints,
     /// From the catalogue or the error set (names the parameter or field).
     #[error(transparent)]
-    Errors(#[from] mte_errors::Error),
+    Errors(#[from] crate::Error),
     /// The error set has no entry with a distribution, so there is nothing to vary.
     #[error(
         "error set `{set}`: no entry has a `distribution`, so there is no uncertain input (give at least one parameter a distribution)"
@@ -142,7 +141,7 @@ impl PoseErrorModel {
     /// J(q)·e₀(q) and leave every index unchanged.
     ///
     /// ```
-    /// use mte::pose_model::{Linearisation, PoseErrorModel, diagonal_points};
+    /// use mte_errors::pose_model::{Linearisation, PoseErrorModel, diagonal_points};
     /// use mte_errors::{Catalogue, ErrorSet, distribution::Distribution, units::Kind};
     /// use mte_kinematics::Machine;
     /// use mte_sensitivity::Model;
@@ -189,24 +188,7 @@ impl PoseErrorModel {
                 });
             }
             let d = e.distribution.expect("random entries have a distribution");
-            let dist = match d {
-                ErrorDistribution::Normal { mean, sd } => Distribution::Normal { mean, sd },
-                ErrorDistribution::Uniform { low, high } => {
-                    Distribution::Uniform { lo: low, hi: high }
-                }
-                ErrorDistribution::TruncatedNormal {
-                    mean,
-                    sd,
-                    low,
-                    high,
-                } => Distribution::TruncatedNormal {
-                    mean,
-                    sd,
-                    lo: low,
-                    hi: high,
-                },
-            };
-            inputs.push(Input::new(e.name.clone(), dist).map_err(|source| {
+            inputs.push(Input::new(e.name.clone(), d).map_err(|source| {
                 PoseModelError::Distribution {
                     entry: e.name.clone(),
                     source,
@@ -375,7 +357,7 @@ impl Model for PoseErrorModel {
 /// for the Y and Z directions relative to X). Points in axis order, mm and rad.
 ///
 /// ```
-/// use mte::pose_model::diagonal_points;
+/// use mte_errors::pose_model::diagonal_points;
 /// use mte_kinematics::Machine;
 /// let m = Machine::library("seed003-ac-table").unwrap(); // X ±400, Y ±425, Z ±275
 /// let p = diagonal_points(&m, 5).unwrap();
@@ -443,7 +425,7 @@ pub fn point_from_mm_deg(machine: &Machine, values: &[f64]) -> Vec<f64> {
 /// point per row. Returns mm and rad.
 ///
 /// ```
-/// use mte::pose_model::points_from_csv;
+/// use mte_errors::pose_model::points_from_csv;
 /// use mte_kinematics::Machine;
 /// let m = Machine::library("seed003-ac-table").unwrap();
 /// let p = points_from_csv(&m, "X,Y,Z,A,C\n100,0,-50,90,0\n", "pts.csv").unwrap();
@@ -490,7 +472,7 @@ pub fn points_from_csv(
 /// Intervals are returned only when every member has them.
 ///
 /// ```
-/// use mte::pose_model::generalised_index;
+/// use mte_errors::pose_model::generalised_index;
 /// // Two outputs: variance 1 with S = (1, 0), variance 3 with S = (0.5, 0.5).
 /// let (s, _) = generalised_index(&[vec![1.0, 0.0], vec![0.5, 0.5]], &[], &[1.0, 3.0], &[0, 1]).unwrap();
 /// assert_eq!(s, [0.625, 0.375]);
