@@ -11,12 +11,38 @@ use xtask::reproduce::{self, Freshness, PAPERS};
 
 const USAGE: &str = "usage: cargo xtask <reproduce [seed000|seed002|seed003|seed004|all] [--check] | reproduce seed003 --timing | bench [-- criterion args] | study [fdr|power|openworld|all] [--n N] [--n-power M] [--seed S] [--kind axis|tracker|rtest] [--base-model omit] [--out FILE]>";
 
+/// `cargo xtask realistic <axis|tracker|rtest> <seed> <dir>`: writes one clean realistic dataset
+/// (every ordinary error, no hidden effect) for trying `mte diagnose` or timing it.
+fn run_realistic(args: &[String]) -> Result<(), String> {
+    let [kind, seed, dir] = args else {
+        return Err("usage: cargo xtask realistic <axis|tracker|rtest> <seed> <dir>".into());
+    };
+    let kind = match kind.as_str() {
+        "axis" => xtask::realistic::Kind::Axis,
+        "tracker" => xtask::realistic::Kind::Tracker,
+        "rtest" => xtask::realistic::Kind::Rtest,
+        other => return Err(format!("kind `{other}`: expected axis, tracker or rtest")),
+    };
+    let seed: u64 = seed.parse().map_err(|e| format!("seed `{seed}`: {e}"))?;
+    let dir = std::path::Path::new(dir);
+    std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
+    let truth = xtask::realistic::write(kind, &[], seed, dir).map_err(|e| e.to_string())?;
+    println!(
+        "wrote {} ({} observations, noise {:.2} µm)",
+        truth.manifest.display(),
+        truth.n_observations,
+        truth.noise_um
+    );
+    Ok(())
+}
+
 fn main() -> ExitCode {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let result = match args.first().map(String::as_str) {
         Some("reproduce") => run_reproduce(&args[1..]),
         Some("bench") => run_bench(&args[1..]),
         Some("study") => run_study(&args[1..]),
+        Some("realistic") => run_realistic(&args[1..]),
         _ => Err(USAGE.to_string()),
     };
     match result {

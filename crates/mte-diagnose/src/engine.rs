@@ -636,16 +636,23 @@ impl Searcher<'_> {
                     }
                     continue;
                 };
-                let score = |t: &Term| {
-                    sol.rss_w - projector.increment(&t.columns, &sol.residuals).delta_rss
-                };
-                if let Some(refined) = self.candidate(ci).refine(vi, &score) {
-                    inc = projector.increment(&refined.columns, &sol.residuals);
-                    overrides.insert((ci, vi), nth_component(refined, times_chosen[ci]));
-                }
                 let k = inc.new_rank;
                 if dof <= k + 1 {
                     continue;
+                }
+                // Refining a period or time constant between its grid neighbours is worth it
+                // only where the grid's best comes near significance.
+                let p_grid = f_test(sol.rss_w, inc.delta_rss, k, dof) * variants_tested as f64;
+                let near = p_grid < REFINE_LEVEL * params.alpha;
+                let score = |t: &Term| {
+                    sol.rss_w - projector.increment(&t.columns, &sol.residuals).delta_rss
+                };
+                if let Some(refined) = near
+                    .then(|| self.candidate(ci).refine(vi, &score))
+                    .flatten()
+                {
+                    inc = projector.increment(&refined.columns, &sol.residuals);
+                    overrides.insert((ci, vi), nth_component(refined, times_chosen[ci]));
                 }
                 let p = f_test(sol.rss_w, inc.delta_rss, k, dof) * variants_tested as f64;
                 scored.push((ci, vi, p.min(1.0), inc.delta_rss / sol.rss_w.max(1e-300)));
@@ -1021,6 +1028,10 @@ fn covariance_with_hyper(
     }
     (aug_sol.cofactor.view((0, 0), (p, p)).into_owned(), hyper)
 }
+
+/// How far above the significance level (as a factor) a scanned candidate's best grid value
+/// still gets its hyper-parameter refined.
+const REFINE_LEVEL: f64 = 1e3;
 
 /// Periodic components one slot may show (pitch, a longer wave of the screw, a harmonic).
 const MAX_PERIODIC_COMPONENTS: usize = 3;
