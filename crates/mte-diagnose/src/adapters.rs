@@ -537,13 +537,14 @@ pub(crate) fn prepare_rtest(manifest_path: &Path, noise_um: Option<f64>) -> Resu
             ..Default::default()
         },
     )?;
-    base.extend(crate::dataset::spec_terms(
+    let (terms, completions) = crate::dataset::spec_terms(
         &spec,
         &observations,
         &effects,
         &location_names(&machine),
         manifest_path,
-    )?);
+    )?;
+    base.extend(terms);
     // A constant in the base is no candidate; its drift is (as one of the base's).
     let candidate_effects: Vec<SlotEffect> = effects
         .into_iter()
@@ -554,6 +555,7 @@ pub(crate) fn prepare_rtest(manifest_path: &Path, noise_um: Option<f64>) -> Resu
     let drifting: Vec<&Term> = base.iter().collect();
     let mut candidates = physical_effects(&observations, &candidate_effects, &drifting);
     candidates.extend(setup_candidates);
+    candidates.extend(completions);
     let title = if data.note.is_empty() {
         format!("R-test on {}", machine.name())
     } else {
@@ -829,17 +831,14 @@ fn prepare_tracker(
         manifest_path,
         crate::BaseModelSpec::default(),
     )?;
-    base.extend(crate::dataset::spec_terms(
-        &spec,
-        &observations,
-        &effects,
-        &[],
-        manifest_path,
-    )?);
+    let (terms, completions) =
+        crate::dataset::spec_terms(&spec, &observations, &effects, &[], manifest_path)?;
+    base.extend(terms);
     effects.retain(|e| {
         !(matches!(e.role, SlotRole::Constant { .. }) && base.iter().any(|b| b.name == e.name))
     });
-    let candidates = physical_effects(&observations, &effects, &[]);
+    let mut candidates = physical_effects(&observations, &effects, &[]);
+    candidates.extend(completions);
     let title = manifest
         .description
         .clone()

@@ -49,6 +49,12 @@ pub trait Candidate: Send + Sync {
     fn requires(&self) -> Option<&str> {
         None
     }
+
+    /// `true` for a higher order of a component error the base already has ([`Completion`]):
+    /// such terms complete the base before the search and are not causes.
+    fn completes_base(&self) -> bool {
+        false
+    }
 }
 
 /// A cause that is a candidate only once the term it builds on is in the model.
@@ -434,34 +440,20 @@ impl BaseModelSpec {
                 SlotRole::Constant { .. } if self.location && location.contains(&slot.name) => {
                     out.push(constant(Family::Base))
                 }
-                SlotRole::Component {
-                    axis, straightness, ..
-                } => {
+                SlotRole::Component { .. } => {
                     let Some(degree) = self.components.as_ref().map(|c| c.degree) else {
                         continue;
                     };
-                    let Some(v) = obs.variable(axis).filter(|v| varies(&v.values)) else {
+                    let Some((lo, hi, rotary)) = component_orders(obs, slot, degree) else {
                         continue;
                     };
-                    let (cols, what) = if v.kind == VariableKind::RotaryAxis {
-                        let harmonics = degree.div_ceil(2);
-                        let cols = slot.modulated(&v.values, &|s| {
-                            let mut m = DMat::zeros(s.len(), 2 * harmonics);
-                            for h in 1..=harmonics {
-                                let sc = sin_cos_columns(s, std::f64::consts::TAU / h as f64);
-                                m.columns_mut(2 * (h - 1), 2).copy_from(&sc);
-                            }
-                            m
-                        });
-                        (cols, format!("harmonics of a turn up to {harmonics}"))
+                    let Some(cols) = component_columns(obs, slot, lo, hi) else {
+                        continue;
+                    };
+                    let what = if rotary {
+                        format!("harmonics of a turn up to {hi}")
                     } else {
-                        let first = if *straightness { 2 } else { 1 };
-                        if first > degree {
-                            continue;
-                        }
-                        let cols =
-                            slot.modulated(&v.values, &|s| legendre_columns(s, first..=degree));
-                        (cols, format!("polynomial in {axis} up to degree {degree}"))
+                        format!("polynomial up to degree {hi}")
                     };
                     let name = format!("{} poly{degree}", slot.name);
                     out.push(Term {
@@ -474,7 +466,7 @@ impl BaseModelSpec {
                         family: Family::Base,
                         columns: cols,
                         summary: Summary::EachCoefficient,
-                        exposed_by: Some(axis.clone()),
+                        exposed_by: component_axis(slot),
                         separated_by: slot.separated_by.clone(),
                     });
                 }
@@ -518,6 +510,148 @@ impl BaseModelSpec {
             }
         }
         Ok(out)
+    }
+}
+
+impl BaseModelSpec {
+    /// The completions of the spec's component errors: for every component error in the base,
+    /// its next polynomial degrees (up to [`MAX_COMPONENT_DEGREE`]) or harmonics (up to
+    /// [`MAX_COMPONENT_HARMONIC`]), one at a time, each after the one before. Real component
+    /// errors are smooth functions, not polynomials of the degree a user happens to state; the
+    /// diagnosis adds these when the data ask for them, before it looks for causes.
+    pub fn completions(&self, obs: &Observations, slots: &[SlotEffect]) -> Vec<Box<dyn Candidate>> {
+        let mut out: Vec<Box<dyn Candidate>> = Vec::new();
+        let Some(degree) = self.components.as_ref().map(|c| c.degree) else {
+            return out;
+        };
+        for slot in slots {
+            if slot.column.iter().all(|v| v.abs() < 1e-15) {
+                continue;
+            }
+            let Some((_, hi, rotary)) = component_orders(obs, slot, degree) else {
+                continue;
+            };
+            let top = if rotary {
+                MAX_COMPONENT_HARMONIC
+            } else {
+                MAX_COMPONENT_DEGREE
+            };
+            let mut after: Option<String> = None;
+            for order in hi + 1..=top {
+                let Some(cols) = component_columns(obs, slot, order, order) else {
+                    break;
+                };
+                let (name, what) = if rotary {
+                    (
+                        format!("{} H{order}", slot.name),
+                        format!("harmonic {order} of a turn"),
+                    )
+                } else {
+                    (format!("{} P{order}", slot.name), format!("degree {order}"))
+                };
+                let term = Term {
+                    coefficients: (0..cols.ncols())
+                        .map(|k| (format!("{name}[{k}]"), slot.quantity))
+                        .collect(),
+                    name: name.clone(),
+                    label: format!("{}, {what}", slot.label),
+                    meaning: slot.meaning.clone(),
+                    family: Family::Base,
+                    columns: cols,
+                    summary: Summary::EachCoefficient,
+                    exposed_by: component_axis(slot),
+                    separated_by: None,
+                };
+                out.push(Box::new(Completion {
+                    term,
+                    after: after.replace(name),
+                }));
+            }
+        }
+        out
+    }
+}
+
+/// Highest polynomial degree the base's component errors of a linear axis are completed to.
+pub const MAX_COMPONENT_DEGREE: usize = 10;
+
+/// Highest harmonic of a turn the base's component errors of a rotary axis are completed to.
+pub const MAX_COMPONENT_HARMONIC: usize = 6;
+
+/// The axis of a component slot.
+fn component_axis(slot: &SlotEffect) -> Option<String> {
+    match &slot.role {
+        SlotRole::Component { axis, .. } => Some(axis.clone()),
+        SlotRole::Constant { .. } => None,
+    }
+}
+
+/// For a component slot whose axis the data move, the orders of a base of `degree`: the lowest
+/// and highest polynomial degree (from 2 for a straightness, whose linear part is the
+/// squareness) or harmonic (1 to ⌈degree / 2⌉ for a rotary axis), and whether it is rotary.
+fn component_orders(
+    obs: &Observations,
+    slot: &SlotEffect,
+    degree: usize,
+) -> Option<(usize, usize, bool)> {
+    let SlotRole::Component {
+        axis, straightness, ..
+    } = &slot.role
+    else {
+        return None;
+    };
+    let v = obs.variable(axis).filter(|v| varies(&v.values))?;
+    if v.kind == VariableKind::RotaryAxis {
+        Some((1, degree.div_ceil(2), true))
+    } else {
+        let lo = if *straightness { 2 } else { 1 };
+        (lo <= degree).then_some((lo, degree, false))
+    }
+}
+
+/// The effect of a component slot's basis functions of orders `lo..=hi` (Legendre degrees over
+/// the observed range for a linear axis, harmonics of a turn for a rotary one).
+fn component_columns(obs: &Observations, slot: &SlotEffect, lo: usize, hi: usize) -> Option<DMat> {
+    let SlotRole::Component { axis, .. } = &slot.role else {
+        return None;
+    };
+    let v = obs.variable(axis)?;
+    let cols = if v.kind == VariableKind::RotaryAxis {
+        slot.modulated(&v.values, &|s| {
+            let mut m = DMat::zeros(s.len(), 2 * (hi + 1 - lo));
+            for h in lo..=hi {
+                let sc = sin_cos_columns(s, std::f64::consts::TAU / h as f64);
+                m.columns_mut(2 * (h - lo), 2).copy_from(&sc);
+            }
+            m
+        })
+    } else {
+        slot.modulated(&v.values, &|s| legendre_columns(s, lo..=hi))
+    };
+    (cols.ncols() > 0 && cols.amax() > 1e-15).then_some(cols)
+}
+
+/// A higher order of a component error the base model already has (see
+/// [`BaseModelSpec::completions`]): the base is completed with it when the data ask for it,
+/// before the search for causes; it is never reported as a cause.
+pub struct Completion {
+    /// The term.
+    pub term: Term,
+    /// The completion it follows (the previous order), if any.
+    pub after: Option<String>,
+}
+
+impl Candidate for Completion {
+    fn variants(&self, _obs: &Observations) -> Vec<Term> {
+        vec![self.term.clone()]
+    }
+
+    fn requires(&self) -> Option<&str> {
+        self.after.as_deref()
+    }
+
+    fn completes_base(&self) -> bool {
+        true
     }
 }
 

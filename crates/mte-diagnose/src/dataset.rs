@@ -324,9 +324,11 @@ fn prepare_axis(manifest: &Manifest, table: &Table, manifest_path: &Path) -> Res
     )?;
     let slots = std::slice::from_ref(&slot);
     let mut base = vec![offset];
-    base.extend(spec_terms(&spec, &observations, slots, &[], manifest_path)?);
+    let (terms, completions) = spec_terms(&spec, &observations, slots, &[], manifest_path)?;
+    base.extend(terms);
     let drifting: Vec<&Term> = base.iter().take(1).collect();
     let mut candidates = physical_effects(&observations, slots, &drifting);
+    candidates.extend(completions);
     if let Some(t) = observations.variable_of_kind(VariableKind::Time) {
         let t0 = t.values.iter().copied().fold(f64::INFINITY, f64::min);
         let col = DMat::from_fn(n, 1, |i, _| position[i] * (t.values[i] - t0));
@@ -368,22 +370,25 @@ pub(crate) fn base_spec(
     })
 }
 
-/// The base terms of `spec` on these slots (named terms looked up in the slots' candidates).
+/// The base terms of `spec` on these slots (named terms looked up in the slots' candidates),
+/// and the completions of its component errors ([`BaseModelSpec::completions`]).
 pub(crate) fn spec_terms(
     spec: &BaseModelSpec,
     obs: &Observations,
     slots: &[SlotEffect],
     location: &[String],
     manifest_path: &Path,
-) -> Result<Vec<Term>> {
+) -> Result<(Vec<Term>, Vec<Box<dyn Candidate>>)> {
     let named = if spec.terms.is_empty() {
         Vec::new()
     } else {
         physical_effects(obs, slots, &[])
     };
-    spec.terms(obs, slots, location, &named)
-        .map_err(|detail| DiagnoseError::Dataset {
-            path: manifest_path.display().to_string(),
-            detail: format!("field `base_model`: {detail}"),
-        })
+    let terms =
+        spec.terms(obs, slots, location, &named)
+            .map_err(|detail| DiagnoseError::Dataset {
+                path: manifest_path.display().to_string(),
+                detail: format!("field `base_model`: {detail}"),
+            })?;
+    Ok((terms, spec.completions(obs, slots)))
 }

@@ -237,6 +237,9 @@ pub struct Diagnosis {
     pub notes: Vec<String>,
     /// Base model parameters as fitted.
     pub base_parameters: Vec<ParameterEstimate>,
+    /// Higher orders of the base's component errors that the data asked for (e.g. `EXX P5`),
+    /// added to the base before the search for causes.
+    pub base_completed: Vec<String>,
     /// Parameters of the stated base model that these data cannot separate from the rest of it
     /// (left out of the fit; their effect is carried by the ones they are confounded with).
     pub base_not_separable: Vec<NotSeparable>,
@@ -322,6 +325,13 @@ pub fn diagnose(
     // The search on all data and the outer folds' searches are independent: run them together.
     let (search, held_out) = rayon::join(|| searcher.search(&w, &folds), || searcher.held_out(&w));
 
+    // The base as completed by the search's data.
+    let base_completed: Vec<String> = search.completed.iter().map(|t| t.name.clone()).collect();
+    let base: Vec<Term> = base.iter().chain(&search.completed).cloned().collect();
+    let searcher = Searcher {
+        base: &base,
+        ..searcher
+    };
     let x0 = design(&base.iter().collect::<Vec<_>>(), n);
     let base_sol = solve(&x0, &obs.values, &w);
     let base_cv = folds.residuals(&x0, &obs.values, &w);
@@ -430,6 +440,7 @@ pub fn diagnose(
         incomplete,
         notes,
         base_parameters,
+        base_completed,
         base_not_separable,
         base_rms_per_setup: group_rms(&base_sol.residuals, &obs.setup, obs.setup_names.len()),
         base_rms_per_channel: group_rms(&base_sol.residuals, &obs.channel, obs.channel_names.len()),
@@ -533,6 +544,8 @@ struct Chosen {
 }
 
 struct SearchResult {
+    /// Higher orders of the base's component errors the data asked for.
+    completed: Vec<Term>,
     chosen: Vec<Chosen>,
     steps: Vec<Step>,
     not_separable: Vec<NotSeparable>,
@@ -541,6 +554,7 @@ struct SearchResult {
 }
 
 /// The search over candidates, on the observations whose weight is not zero.
+#[derive(Clone, Copy)]
 struct Searcher<'a> {
     obs: &'a Observations,
     base: &'a [Term],
@@ -557,8 +571,72 @@ impl Searcher<'_> {
         self.candidates[self.pool.source[entry]].as_ref()
     }
 
-    /// Forward search, then backward pruning. Observations of weight zero take no part.
+    /// Completes the base, then searches for causes on top of it. Observations of weight zero
+    /// take no part.
     fn search(&self, w: &DVec, folds: &Folds) -> SearchResult {
+        let completed = self.complete(w);
+        let base: Vec<Term> = self.base.iter().chain(&completed).cloned().collect();
+        let mut found = Searcher {
+            base: &base,
+            ..*self
+        }
+        .search_causes(w, folds);
+        found.completed = completed;
+        found
+    }
+
+    /// The base's completion: higher orders of its component errors ([`Candidate::completes_base`]),
+    /// one at a time, the most significant first, while one is significant at
+    /// [`COMPLETION_LEVEL`] (Bonferroni over those eligible).
+    fn complete(&self, w: &DVec) -> Vec<Term> {
+        let n = self.obs.len();
+        let entries: Vec<usize> = (0..self.pool.variants.len())
+            .filter(|&ci| self.candidate(ci).completes_base())
+            .collect();
+        let mut done: Vec<Term> = Vec::new();
+        let mut used = vec![false; self.pool.variants.len()];
+        loop {
+            let terms: Vec<&Term> = self.base.iter().chain(&done).collect();
+            let x = design(&terms, n);
+            let sol = solve(&x, &self.obs.values, w);
+            let projector = Projector::new(&x, w);
+            let eligible: Vec<usize> = entries
+                .iter()
+                .copied()
+                .filter(|&ci| {
+                    !used[ci]
+                        && self
+                            .candidate(ci)
+                            .requires()
+                            .is_none_or(|r| terms.iter().any(|t| t.name == r))
+                })
+                .collect();
+            let mut best: Option<(usize, f64)> = None;
+            for &ci in &eligible {
+                let t = &self.pool.variants[ci][0];
+                let inc = projector.increment(&t.columns, &sol.residuals);
+                if inc.separability < SEPARABILITY_TOLERANCE || inc.new_rank < t.width() {
+                    used[ci] = true;
+                    continue;
+                }
+                let p = f_test(sol.rss_w, inc.delta_rss, inc.new_rank, sol.dof());
+                if best.is_none_or(|(_, bp)| p < bp) {
+                    best = Some((ci, p));
+                }
+            }
+            match best {
+                Some((ci, p)) if p * (eligible.len() as f64) < COMPLETION_LEVEL => {
+                    used[ci] = true;
+                    done.push(self.pool.variants[ci][0].clone());
+                }
+                _ => break,
+            }
+        }
+        done
+    }
+
+    /// Forward search, then backward pruning.
+    fn search_causes(&self, w: &DVec, folds: &Folds) -> SearchResult {
         let obs = self.obs;
         let params = self.params;
         let y = &obs.values;
@@ -600,7 +678,11 @@ impl Searcher<'_> {
                     })
             };
             let eligible: Vec<usize> = (0..entries)
-                .filter(|&ci| !used[ci] && self.candidate(ci).requires().is_none_or(present))
+                .filter(|&ci| {
+                    !used[ci]
+                        && !self.candidate(ci).completes_base()
+                        && self.candidate(ci).requires().is_none_or(present)
+                })
                 .collect();
             let variants_tested: usize = eligible
                 .iter()
@@ -781,6 +863,7 @@ impl Searcher<'_> {
         }
         let pruned = self.prune(&mut chosen, w, folds);
         SearchResult {
+            completed: Vec::new(),
             chosen,
             steps,
             not_separable,
@@ -902,7 +985,6 @@ impl Searcher<'_> {
         let obs = self.obs;
         let n = obs.len();
         let outer = Folds::blocked(obs, &vec![true; n], k, self.params.blocks_per_fold);
-        let base_x = design(&self.base.iter().collect::<Vec<_>>(), n);
         let runs: Vec<(Vec<(usize, f64, f64)>, Vec<String>)> = outer
             .test
             .par_iter()
@@ -920,8 +1002,18 @@ impl Searcher<'_> {
                     self.params.blocks_per_fold,
                 );
                 let found = self.search(&w_train, &inner);
-                let base = solve(&base_x, &obs.values, &w_train);
-                let terms = self.with(&found.chosen, None);
+                let completed: Vec<Term> =
+                    self.base.iter().chain(&found.completed).cloned().collect();
+                let base = solve(
+                    &design(&completed.iter().collect::<Vec<_>>(), n),
+                    &obs.values,
+                    &w_train,
+                );
+                let terms = Searcher {
+                    base: &completed,
+                    ..*self
+                }
+                .with(&found.chosen, None);
                 let diagnosed = solve(
                     &design(&terms.iter().collect::<Vec<_>>(), n),
                     &obs.values,
@@ -1028,6 +1120,11 @@ fn covariance_with_hyper(
     }
     (aug_sol.cofactor.view((0, 0), (p, p)).into_owned(), hyper)
 }
+
+/// Level (Bonferroni over the eligible ones) at which a higher order of a base component error
+/// completes the base. Generous: an order too many costs a little power, one too few leaves
+/// smooth structure that would be mistaken for a cause.
+const COMPLETION_LEVEL: f64 = 0.01;
 
 /// How far above the significance level (as a factor) a scanned candidate's best grid value
 /// still gets its hyper-parameter refined.

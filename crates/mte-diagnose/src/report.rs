@@ -174,6 +174,13 @@ pub fn markdown(d: &Diagnosis, title: &str) -> String {
     for note in &d.notes {
         let _ = writeln!(s, "Note: {note}.\n");
     }
+    if !d.base_completed.is_empty() {
+        let _ = writeln!(
+            s,
+            "The base model's component errors needed higher orders than stated (added before the search, not causes): {}.\n",
+            d.base_completed.join(", ")
+        );
+    }
     if !d.pruned.is_empty() {
         let _ = writeln!(
             s,

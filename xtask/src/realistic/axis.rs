@@ -196,7 +196,7 @@ pub(crate) fn write(spec: &Spec, rng: &mut ChaCha8Rng, dir: &Path) -> std::io::R
         "noise_um": stated_noise_um(sigma.max(0.05)),
         "data": "runs.csv",
     });
-    if let Some(b) = spec.base_model.resolve(Kind::Axis) {
+    if let Some(b) = spec.base_model.resolve() {
         manifest["base_model"] = b;
     }
     let path = dir.join("manifest.json");

@@ -219,7 +219,8 @@ pub struct Truth {
 /// The base model written in the manifest.
 #[derive(Debug, Clone, PartialEq)]
 pub enum BaseModel {
-    /// The kind's default: omitted for axis and R-test, [`BaseModel::standard`] for tracker.
+    /// The user's model of a real machine, [`BaseModel::standard`], for every kind: every
+    /// ordinary error (component errors, squareness, location errors) is in it.
     Default,
     /// Leave the field out.
     Omit,
@@ -233,10 +234,10 @@ impl BaseModel {
         serde_json::json!({"components": {"degree": 3}, "squareness": true, "location": true})
     }
 
-    /// The value to write for `kind`, if any.
-    pub fn resolve(&self, kind: Kind) -> Option<serde_json::Value> {
+    /// The value to write, if any.
+    pub fn resolve(&self) -> Option<serde_json::Value> {
         match self {
-            BaseModel::Default => (kind == Kind::Tracker).then(Self::standard),
+            BaseModel::Default => Some(Self::standard()),
             BaseModel::Omit => None,
             BaseModel::Given(v) => Some(v.clone()),
         }

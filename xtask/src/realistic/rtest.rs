@@ -503,7 +503,7 @@ pub(crate) fn write(spec: &Spec, rng: &mut ChaCha8Rng, dir: &Path) -> std::io::R
         "axes": ["X", "Y", "Z", "B", "C"],
         "setups": setups,
     });
-    if let Some(b) = spec.base_model.resolve(Kind::Rtest) {
+    if let Some(b) = spec.base_model.resolve() {
         manifest["base_model"] = b;
     }
     let path = dir.join("manifest.json");
