@@ -327,15 +327,10 @@ fn generators_are_deterministic_and_hide_the_truth() {
 }
 
 #[test]
-fn base_model_defaults_per_kind() {
+fn base_model_default_is_the_standard_user_model() {
     let standard = BaseModel::standard();
-    assert_eq!(
-        BaseModel::Default.resolve(Kind::Tracker),
-        Some(standard.clone())
-    );
-    assert_eq!(BaseModel::Default.resolve(Kind::Axis), None);
-    assert_eq!(BaseModel::Default.resolve(Kind::Rtest), None);
-    assert_eq!(BaseModel::Omit.resolve(Kind::Tracker), None);
+    assert_eq!(BaseModel::Default.resolve(), Some(standard.clone()));
+    assert_eq!(BaseModel::Omit.resolve(), None);
     assert_eq!(standard["components"]["degree"], 3);
 }
 

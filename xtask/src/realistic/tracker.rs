@@ -390,7 +390,7 @@ pub(crate) fn write(spec: &Spec, rng: &mut ChaCha8Rng, dir: &Path) -> std::io::R
         "targets": "targets.csv",
         "setups": setups,
     });
-    if let Some(b) = spec.base_model.resolve(Kind::Tracker) {
+    if let Some(b) = spec.base_model.resolve() {
         manifest["base_model"] = b;
     }
     let path = dir.join("manifest.json");
