@@ -1,7 +1,7 @@
 //! `cargo xtask reproduce [seed000|seed002|seed003|seed004|all] [--check]`,
 //! `cargo xtask reproduce seed003 --timing` (writes `docs/reproduction/seed003-timing.md`) and
 //! `cargo xtask bench [-- criterion args]` and
-//! `cargo xtask study [fdr|power|openworld|all] [--n N] [--n-power M] [--seed S] [--kind axis|tracker|rtest] [--base-model omit] [--out FILE]`.
+//! `cargo xtask study [fdr|power|coverage|openworld|all] [--n N] [--n-power M] [--seed S] [--kind axis|tracker|rtest] [--base-model omit] [--out FILE]`.
 //!
 //! The generators are in the library target (`xtask::reproduce`), so the staleness test in
 //! `tests/reproduction_up_to_date.rs` runs the very same code.
@@ -9,7 +9,7 @@
 use std::process::{Command, ExitCode};
 use xtask::reproduce::{self, Freshness, PAPERS};
 
-const USAGE: &str = "usage: cargo xtask <reproduce [seed000|seed002|seed003|seed004|all] [--check] | reproduce seed003 --timing | bench [-- criterion args] | study [fdr|power|openworld|all] [--n N] [--n-power M] [--seed S] [--kind axis|tracker|rtest] [--base-model omit] [--out FILE]>";
+const USAGE: &str = "usage: cargo xtask <reproduce [seed000|seed002|seed003|seed004|all] [--check] | reproduce seed003 --timing | bench [-- criterion args] | study [fdr|power|coverage|openworld|all] [--n N] [--n-power M] [--seed S] [--kind axis|tracker|rtest] [--base-model omit] [--out FILE]>";
 
 /// `cargo xtask realistic <axis|tracker|rtest> <seed> <dir>`: writes one clean realistic dataset
 /// (every ordinary error, no hidden effect) for trying `mte diagnose` or timing it.
@@ -163,7 +163,7 @@ fn run_study(args: &[String]) -> Result<(), String> {
             recorded.extend([a.to_string(), v]);
         } else {
             match a {
-                "fdr" | "power" | "openworld" | "all" => which = a.to_string(),
+                "fdr" | "power" | "coverage" | "openworld" | "all" => which = a.to_string(),
                 other => return Err(format!("unknown argument `{other}`\n{USAGE}")),
             }
             recorded.push(a.to_string());
@@ -190,13 +190,28 @@ fn run_study(args: &[String]) -> Result<(), String> {
             .into_iter()
             .filter(|c| kinds.contains(&c.0))
         {
+            let base = match base_model {
+                BaseModel::Default => studies::user_model_lacking(effect),
+                ref other => other.clone(),
+            };
             report.power.extend(studies::power_with(
+                kind, effect, &sizes, n_power, seed, &base,
+            ));
+        }
+    }
+    if which == "coverage" || which == "all" {
+        // Coverage of the stated uncertainties: one size per effect, `--n` datasets each.
+        for (kind, effect, size) in studies::coverage_plan()
+            .into_iter()
+            .filter(|c| kinds.contains(&c.0))
+        {
+            report.coverage.extend(studies::power_with(
                 kind,
                 effect,
-                &sizes,
-                n_power,
+                &[size],
+                n,
                 seed,
-                &base_model,
+                &studies::user_model_lacking(effect),
             ));
         }
     }

@@ -1,0 +1,79 @@
+//! The diagnosis on realistic machines: every ordinary error present (random smooth functions
+//! of random realistic size, random noise), the user's model stating them, hidden effects on
+//! top. The generators (`xtask::realistic`) share no code with the engine; the diagnosis reads
+//! only the files they write, and nothing in those files tells what is hidden.
+//!
+//! A few datasets per case, so CI stays short; the studies with hundreds of datasets are
+//! `cargo xtask study all` and their figures are in `docs/diagnosis-studies.md`.
+
+use xtask::realistic::Kind;
+use xtask::studies::{self, Effect};
+
+/// Seed of these tests' datasets (the studies use others).
+const SEED: u64 = 2026;
+
+#[test]
+fn clean_realistic_machines_rarely_yield_a_discovery() {
+    // At a 5 % false-discovery rate, 2 or more discoveries among 12 clean datasets happen with
+    // probability 0.12; 3 or more with 0.02.
+    for (kind, n) in [(Kind::Axis, 12), (Kind::Tracker, 6), (Kind::Rtest, 4)] {
+        let f = studies::fdr(kind, n, SEED);
+        assert_eq!(f.errors, 0, "{:?}: {:?}", kind, f.first_error);
+        let allowed = if n >= 12 { 2 } else { 1 };
+        assert!(
+            f.with_finding <= allowed,
+            "{kind:?}: {} of {n} clean datasets with a finding: {:?}",
+            f.with_finding,
+            f.names
+        );
+    }
+}
+
+#[test]
+fn hidden_axis_effects_are_named_and_sized() {
+    for (effect, size) in [(Effect::Pitch, 2.0), (Effect::Reversal, 1.5)] {
+        let cells = studies::power(Kind::Axis, effect, &[size], 6, SEED);
+        let c = &cells[0];
+        assert_eq!(c.errors, 0);
+        assert_eq!(
+            c.named_right, c.n,
+            "{effect:?} {size}: named right in {} of {}: {:?}",
+            c.named_right, c.n, c.names
+        );
+        assert!(
+            c.estimate_within_2u + 1 >= c.named_right,
+            "{effect:?} {size}: within 2 u in {} of {}",
+            c.estimate_within_2u,
+            c.named_right
+        );
+    }
+}
+
+#[test]
+fn hidden_tracker_pitch_is_named() {
+    let cells = studies::power(Kind::Tracker, Effect::Pitch, &[3.0], 4, SEED);
+    let c = &cells[0];
+    assert_eq!(c.errors, 0);
+    assert!(
+        c.named_right + 1 >= c.n,
+        "named right in {} of {}: {:?}",
+        c.named_right,
+        c.n,
+        c.names
+    );
+}
+
+#[test]
+fn open_world_sawtooth_is_not_a_confident_wrong_cause() {
+    // A sawtooth positioning error is no candidate's shape: the right answer is structure the
+    // library does not explain, not a cause declared to explain the data.
+    let o = studies::openworld(Kind::Axis, Effect::Sawtooth, 2.0, 6, SEED);
+    assert_eq!(o.errors, 0);
+    assert!(
+        o.confident_wrong <= 1,
+        "{} of {} confident wrong causes: {:?}",
+        o.confident_wrong,
+        o.n,
+        o.names
+    );
+}
