@@ -1314,7 +1314,11 @@ fn held_out_error(choices: impl Iterator<Item = FoldChoice>) -> f64 {
         sum += c.held_out * c.rows as f64;
         rows += c.rows;
     }
-    if rows > 0 { sum / rows as f64 } else { f64::NAN }
+    if rows > 0 {
+        sum / rows as f64
+    } else {
+        f64::NAN
+    }
 }
 
 /// OMP with the selection rule on one output; `c0[v]` = Ψ_vᵀy and `col_norm2[v]` the squared
@@ -1343,7 +1347,16 @@ fn omp_select(
         .enumerate()
         .map(|(v, c)| {
             let nt = if v == 0 { n } else { n - d.segs[v - 1].1 };
-            Path::new(d, y, v, kmax(nt), direct_after, by_loo, col_norm2[v].clone(), c)
+            Path::new(
+                d,
+                y,
+                v,
+                kmax(nt),
+                direct_after,
+                by_loo,
+                col_norm2[v].clone(),
+                c,
+            )
         })
         .collect();
     loop {
@@ -1444,7 +1457,10 @@ fn omp_select(
             .iter()
             .map(|fp| FoldChoice {
                 loo: fp.best,
-                held_out: fp.best_p.checked_sub(1).map_or(f64::NAN, |i| fp.hold_err[i] / var_y),
+                held_out: fp
+                    .best_p
+                    .checked_sub(1)
+                    .map_or(f64::NAN, |i| fp.hold_err[i] / var_y),
                 rows: fp.hold.len(),
             })
             .collect()
@@ -1926,17 +1942,18 @@ impl PceResult {
         let mut xi = x.to_vec();
         problem.to_germ(&mut xi);
         let out = &self.outputs[o];
-        let p = out.degree;
-        let mut u = vec![0.0; p + 1];
+        let w = out.degree + 1;
+        // ψ₀…ψ_p of every input, once
+        let mut u = vec![0.0; xi.len() * w];
+        for ((v, &g), ui) in xi.iter().zip(&self.germs).zip(u.chunks_exact_mut(w)) {
+            univariate(g, *v, out.degree, ui);
+        }
         out.terms
             .iter()
             .map(|(mi, c)| {
                 c * mi
                     .iter()
-                    .map(|&(v, d)| {
-                        univariate(self.germs[v as usize], xi[v as usize], p, &mut u);
-                        u[d as usize]
-                    })
+                    .map(|&(v, d)| u[v as usize * w + d as usize])
                     .product::<f64>()
             })
             .sum()
