@@ -23,6 +23,17 @@
 //! The degree is chosen the same way when `adaptive_degree` is on (degrees 1 … p, stop when the
 //! error grows).
 //!
+//! Every result carries an error on new inputs that sees the search
+//! ([`PceOutput::selection_aware_error`]). Under K-fold that is the CV error. The corrected LOO
+//! treats the chosen terms as fixed, so after a search over far more candidates than runs it is
+//! optimistic, by orders of magnitude on hard problems; under corrected LOO the runs are
+//! therefore split into [`LOO_CHECK_FOLDS`] folds as under K-fold, and each fold path runs the
+//! corrected-LOO search on its training rows by its own corrected LOO (size, stopping, at most
+//! half its training runs), its choice scored on its held-out rows. The full-data path is
+//! unaffected by the folds. As under K-fold, the choice among degrees is not repeated. [`PceOutput::warnings`] flags errors that disagree
+//! and errors too large for the indices to be read; [`build_pce`] can measure the error on fresh
+//! runs ([`PceParams::validation`]).
+//!
 //! Sobol' indices from the coefficients (Sudret 2008): V = Σ_{α≠0} c_α², Sᵢ = Σ_{α: only i} c_α²/V,
 //! S_Tᵢ = Σ_{α ∋ i} c_α²/V, S_ij = Σ_{α: exactly {i, j}} c_α²/V.
 
@@ -152,9 +163,10 @@ pub struct PceOutput {
     pub omp_steps: usize,
     /// Estimate of the mean squared error / Var(y) on new inputs that sees the term search:
     /// under K-fold the K-fold CV error (`cv_error`); under corrected LOO the corrected-LOO
-    /// search (size, and degree with `adaptive_degree`) repeated on the training runs of each of
-    /// [`LOO_CHECK_FOLDS`] folds, the error of each fold's choice on its held-out runs,
-    /// averaged. The error to read.
+    /// term search repeated on the training runs of each of [`LOO_CHECK_FOLDS`] folds (at the
+    /// chosen degree), the error of each fold's choice on its held-out runs, averaged. The error
+    /// to read. Neither rule repeats the choice among the few degrees of `adaptive_degree`
+    /// inside the folds.
     pub selection_aware_error: f64,
     /// Mean squared error / Var(y) on fresh model runs ([`PceParams::validation`]; `None`
     /// without, or from [`fit_pce`]).
@@ -1293,32 +1305,8 @@ struct Fit {
     train_error: f64,
     steps: usize,
     crit: f64,
-    /// Under corrected LOO with folds: each fold's own choice ([`FoldChoice`]).
-    fold_choices: Vec<FoldChoice>,
-}
-
-/// What the corrected-LOO search run on one fold's training rows chose: its smallest corrected
-/// LOO, and the mean squared error / Var(y) on the fold's held-out rows at that size.
-#[derive(Clone, Copy, Debug)]
-struct FoldChoice {
-    loo: f64,
-    held_out: f64,
-    rows: usize,
-}
-
-/// The folds' held-out errors of their own choices, weighted by their held-out rows (NaN when no
-/// fold chose a model).
-fn held_out_error(choices: impl Iterator<Item = FoldChoice>) -> f64 {
-    let (mut sum, mut rows) = (0.0, 0);
-    for c in choices.filter(|c| c.held_out.is_finite()) {
-        sum += c.held_out * c.rows as f64;
-        rows += c.rows;
-    }
-    if rows > 0 {
-        sum / rows as f64
-    } else {
-        f64::NAN
-    }
+    /// [`PceOutput::selection_aware_error`].
+    selection_aware: f64,
 }
 
 /// OMP with the selection rule on one output; `c0[v]` = Ψ_vᵀy and `col_norm2[v]` the squared
@@ -1452,20 +1440,21 @@ fn omp_select(
         .get(p_star.saturating_sub(1))
         .copied()
         .unwrap_or(f64::NAN);
-    let fold_choices = if by_loo {
-        paths[1..]
-            .iter()
-            .map(|fp| FoldChoice {
-                loo: fp.best,
-                held_out: fp
-                    .best_p
-                    .checked_sub(1)
-                    .map_or(f64::NAN, |i| fp.hold_err[i] / var_y),
-                rows: fp.hold.len(),
-            })
-            .collect()
+    // under corrected LOO: each fold path's own choice (its smallest corrected LOO) scored on
+    // its held-out rows, weighted by their number
+    let selection_aware = if by_loo {
+        let (mut sum, mut rows) = (0.0, 0);
+        for fp in paths[1..].iter().filter(|fp| fp.best_p > 0) {
+            sum += fp.hold_err[fp.best_p - 1] * fp.hold.len() as f64;
+            rows += fp.hold.len();
+        }
+        if rows > 0 {
+            sum / rows as f64 / var_y
+        } else {
+            f64::NAN
+        }
     } else {
-        vec![]
+        cv_error
     };
     Fit {
         terms,
@@ -1474,7 +1463,7 @@ fn omp_select(
         train_error: tr / n as f64 / var_y,
         steps: full.active.len(),
         crit: if by_loo { loo } else { cv_error },
-        fold_choices,
+        selection_aware,
     }
 }
 
@@ -1702,10 +1691,6 @@ pub fn fit_pce(
     // One fold partition for all outputs (drawn from the seed); rows are stored fold by fold.
     let (perm, segs) = fold_order(n, folds_of(params, n), params.seed);
     let by_loo = params.selection == Selection::CorrectedLoo;
-    // under corrected LOO, each fold's own search over the degrees: its choice so far, and
-    // whether its degree still grows (it stops, as the search on all runs does, when its
-    // criterion grows)
-    let mut fold_searches: Vec<Vec<(FoldChoice, bool)>> = vec![vec![]; m];
     let mut inv = vec![0; n];
     for (pos, &r) in perm.iter().enumerate() {
         inv[r] = pos;
@@ -1759,20 +1744,6 @@ pub fn fit_pce(
         }
         for (o, f) in fits.into_iter().enumerate() {
             if let Some(f) = f {
-                let searches = &mut fold_searches[o];
-                if searches.is_empty() {
-                    searches.extend(f.fold_choices.iter().map(|&c| (c, true)));
-                } else {
-                    for (search, &c) in searches.iter_mut().zip(&f.fold_choices) {
-                        if search.1 {
-                            if c.loo < search.0.loo {
-                                search.0 = c;
-                            } else {
-                                search.1 = false;
-                            }
-                        }
-                    }
-                }
                 let better = best[o].as_ref().is_none_or(|(_, b)| f.crit < b.crit);
                 if better {
                     best[o] = Some((di, f));
@@ -1788,15 +1759,9 @@ pub fn fit_pce(
     }
     let outputs: Vec<PceOutput> = best
         .into_par_iter()
-        .zip(fold_searches)
         .enumerate()
-        .map(|(o, (b, searches))| {
+        .map(|(o, b)| {
             let (di, fit) = b.expect("at least one degree fitted");
-            let selection_aware_error = if by_loo {
-                held_out_error(searches.iter().map(|s| s.0))
-            } else {
-                fit.cv_error
-            };
             let basis = &psis[di].basis;
             let (mean, variance, first, total, interactions) = indices_from(k, basis, &fit.terms);
             let (mut first_ci, mut total_ci) = (vec![], vec![]);
@@ -1845,7 +1810,7 @@ pub fn fit_pce(
                 loo_error: fit.loo_error,
                 train_error: fit.train_error,
                 omp_steps: fit.steps,
-                selection_aware_error,
+                selection_aware_error: fit.selection_aware,
                 validation_error: None,
                 warnings: vec![],
             }
