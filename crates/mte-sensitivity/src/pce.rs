@@ -2007,7 +2007,8 @@ mod tests {
     }
 
     /// The two ways a path updates its correlations — Gram column and U = Ψ_vᵀQ, or the direct
-    /// product Ψ_vᵀq — choose the same terms and coefficients, with and without folds.
+    /// product Ψ_vᵀq — choose the same terms and coefficients: corrected LOO without folds and
+    /// with them (the selection-aware estimate), K-fold.
     #[test]
     fn direct_and_gram_updates_agree() {
         let (n, k, deg) = (120, 3, 3);
@@ -2020,7 +2021,8 @@ mod tests {
             .map(|x| (1.3 * x[0]).sin() + 0.4 * x[1] * x[2] + 0.1 * (2.0 * x[2]).cos())
             .collect();
         let basis = multi_indices(k, deg, 1.0);
-        for segs in [vec![(0, n)], vec![(0, 40), (40, 40), (80, 40)]] {
+        let folds = vec![(0, 40), (40, 40), (80, 40)];
+        for (segs, by_loo) in [(vec![(0, n)], true), (folds.clone(), true), (folds, false)] {
             let d = Design::new(&xi, n, k, &germs, deg, &basis, segs);
             let fit = |direct_after: usize| {
                 let c0 = d
@@ -2035,7 +2037,7 @@ mod tests {
                     &y,
                     c0,
                     Some(60),
-                    false,
+                    by_loo,
                     direct_after,
                     false,
                 )
@@ -2043,6 +2045,13 @@ mod tests {
             let (gram, direct) = (fit(usize::MAX), fit(0));
             assert_eq!(gram.steps, direct.steps);
             assert_eq!(gram.terms.len(), direct.terms.len());
+            // without folds there is no estimate beside corrected LOO
+            let (a, b) = (gram.selection_aware, direct.selection_aware);
+            if d.segs.len() > 1 {
+                assert!(a.is_finite() && (a - b).abs() <= 1e-9 * a, "{a} vs {b}");
+            } else {
+                assert!(a.is_nan() && b.is_nan());
+            }
             assert!(gram.terms.len() > 3);
             for (a, b) in gram.terms.iter().zip(&direct.terms) {
                 assert_eq!(a.0, b.0);
