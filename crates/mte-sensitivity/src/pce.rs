@@ -30,9 +30,9 @@
 //! therefore split into [`LOO_CHECK_FOLDS`] folds as under K-fold, and each fold path runs the
 //! corrected-LOO search on its training rows by its own corrected LOO (size, stopping, at most
 //! half its training runs), its choice scored on its held-out rows. The full-data path is
-//! unaffected by the folds. As under K-fold, the choice among degrees is not repeated. [`PceOutput::warnings`] flags errors that disagree
-//! and errors too large for the indices to be read; [`build_pce`] can measure the error on fresh
-//! runs ([`PceParams::validation`]).
+//! unaffected by the folds. As under K-fold, the choice among degrees is not repeated.
+//! [`PceOutput::warnings`] flags errors that disagree and errors too large for the indices to be
+//! read; [`build_pce`] can measure the error on fresh runs ([`PceParams::validation`]).
 //!
 //! Sobol' indices from the coefficients (Sudret 2008): V = Σ_{α≠0} c_α², Sᵢ = Σ_{α: only i} c_α²/V,
 //! S_Tᵢ = Σ_{α ∋ i} c_α²/V, S_ij = Σ_{α: exactly {i, j}} c_α²/V.
