@@ -181,14 +181,28 @@ fn identical_across_thread_counts() {
         n_bootstrap: 20,
         ..Default::default()
     };
-    let run = |t: usize| {
+    let run = |t: usize, params: &PceParams| {
         rayon::ThreadPoolBuilder::new()
             .num_threads(t)
             .build()
             .unwrap()
-            .install(|| build_pce(&f, &prob, &params).unwrap())
+            .install(|| build_pce(&f, &prob, params).unwrap())
     };
-    assert_eq!(run(1), run(2));
+    assert_eq!(run(1, &params), run(2, &params));
+    // corrected LOO with its fold searches, and a validation on fresh runs
+    let loo = PceParams {
+        selection: Selection::CorrectedLoo,
+        validation: Some(Validation {
+            n: 1000,
+            seed: None,
+        }),
+        ..params
+    };
+    let (one, two) = (run(1, &loo), run(2, &loo));
+    assert!(one.outputs[1].validation_error.is_some());
+    // cv_error is NaN under corrected LOO (NaN ≠ NaN): compared through Debug, which prints
+    // every value in full (shortest round-trip form)
+    assert_eq!(format!("{one:?}"), format!("{two:?}"));
 }
 
 #[test]
