@@ -116,7 +116,8 @@ fn benches(c: &mut Criterion) {
     g.bench_function("pce_deg3_k41_n1000_kfold", |b| {
         b.iter(|| black_box(build_pce(&f, &prob, &p).unwrap()))
     });
-    // The peers' setting (numpy OMP + corrected LOO): one path instead of K + 1.
+    // The peers' setting (numpy OMP + corrected LOO). The full-data path alone chooses the
+    // model; the 5 fold paths beside it repeat the search for the selection-aware error.
     let pl = PceParams {
         selection: Selection::CorrectedLoo,
         ..p.clone()

@@ -23,6 +23,17 @@
 //! The degree is chosen the same way when `adaptive_degree` is on (degrees 1 … p, stop when the
 //! error grows).
 //!
+//! Every result carries an error on new inputs that sees the search
+//! ([`PceOutput::selection_aware_error`]). Under K-fold that is the CV error. The corrected LOO
+//! treats the chosen terms as fixed, so after a search over far more candidates than runs it is
+//! optimistic, by orders of magnitude on hard problems; under corrected LOO the runs are
+//! therefore split into [`LOO_CHECK_FOLDS`] folds as under K-fold, and each fold path runs the
+//! corrected-LOO search on its training rows by its own corrected LOO (size, stopping, at most
+//! half its training runs), its choice scored on its held-out rows. The full-data path is
+//! unaffected by the folds. As under K-fold, the choice among degrees is not repeated.
+//! [`PceOutput::warnings`] flags errors that disagree and errors too large for the indices to be
+//! read; [`build_pce`] can measure the error on fresh runs ([`PceParams::validation`]).
+//!
 //! Sobol' indices from the coefficients (Sudret 2008): V = Σ_{α≠0} c_α², Sᵢ = Σ_{α: only i} c_α²/V,
 //! S_Tᵢ = Σ_{α ∋ i} c_α²/V, S_ij = Σ_{α: exactly {i, j}} c_α²/V.
 
@@ -52,7 +63,8 @@ pub enum Selection {
         folds: usize,
     },
     /// Corrected leave-one-out error on the full-data path (UQLab-style; can overfit when
-    /// candidates far outnumber runs).
+    /// candidates far outnumber runs, and its score does not see the search: the result
+    /// reports a selection-aware estimate beside it, [`PceOutput::selection_aware_error`]).
     CorrectedLoo,
 }
 
@@ -80,6 +92,22 @@ pub struct PceParams {
     pub n_samples: usize,
     /// Design for [`build_pce`].
     pub sampling: Sampling,
+    /// Fresh model runs on which [`build_pce`] measures the fitted expansion's error
+    /// ([`PceOutput::validation_error`]); none by default.
+    pub validation: Option<Validation>,
+}
+
+/// Fresh model runs for the validation error: independent Monte Carlo points, so that the
+/// relative mean squared error on them is an unbiased estimate of the error on new inputs.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Validation {
+    /// Number of runs.
+    pub n: usize,
+    /// Seed of their design (default: the PCE seed on a stream of its own, independent of the
+    /// fit's design).
+    #[serde(default)]
+    pub seed: Option<u64>,
 }
 
 impl Default for PceParams {
@@ -95,6 +123,7 @@ impl Default for PceParams {
             seed: 0,
             n_samples: 1000,
             sampling: Sampling::LatinHypercube,
+            validation: None,
         }
     }
 }
@@ -120,16 +149,168 @@ pub struct PceOutput {
     pub first_ci: Vec<[f64; 2]>,
     /// Bootstrap intervals of the total indices.
     pub total_ci: Vec<[f64; 2]>,
-    /// Validation error: K-fold CV mean squared error / Var(y) at the chosen size (NaN under
-    /// corrected LOO selection).
+    /// K-fold CV mean squared error / Var(y) at the chosen size: each fold runs the search on
+    /// its training runs (NaN under corrected LOO selection).
     pub cv_error: f64,
-    /// Corrected leave-one-out error / Var(y) of the chosen model.
+    /// Corrected leave-one-out error / Var(y) of the chosen model. It treats the chosen terms
+    /// as fixed in advance: after a search over many more candidates than runs it can be
+    /// optimistic by orders of magnitude; read [`PceOutput::selection_aware_error`].
     pub loo_error: f64,
-    /// Training mean squared error / Var(y).
+    /// Training mean squared error / Var(y) (optimistic by construction).
     pub train_error: f64,
     /// OMP steps taken on the full-data path (under K-fold CV the chosen size, unless the path
     /// ran out of candidates or fitted the runs exactly before it).
     pub omp_steps: usize,
+    /// Estimate of the mean squared error / Var(y) on new inputs that sees the term search:
+    /// under K-fold the K-fold CV error (`cv_error`); under corrected LOO the corrected-LOO
+    /// term search repeated on the training runs of each of [`LOO_CHECK_FOLDS`] folds (at the
+    /// chosen degree), the error of each fold's choice on its held-out runs, averaged. The error
+    /// to read. Neither rule repeats the choice among the few degrees of `adaptive_degree`
+    /// inside the folds.
+    pub selection_aware_error: f64,
+    /// Mean squared error / Var(y) on fresh model runs ([`PceParams::validation`]; `None`
+    /// without, or from [`fit_pce`]).
+    pub validation_error: Option<f64>,
+    /// Where the reported errors say the expansion or its error is not to be trusted.
+    pub warnings: Vec<PceWarning>,
+}
+
+/// A reported error, by name.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ErrorName {
+    /// [`PceOutput::loo_error`], the corrected-LOO rule's own score.
+    CorrectedLoo,
+    /// [`PceOutput::selection_aware_error`].
+    SelectionAware,
+    /// [`PceOutput::validation_error`].
+    Validation,
+}
+
+impl std::fmt::Display for ErrorName {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            ErrorName::CorrectedLoo => "corrected LOO error",
+            ErrorName::SelectionAware => "selection-aware error",
+            ErrorName::Validation => "validation error",
+        })
+    }
+}
+
+/// Two reported errors differing by more than this factor disagree ([`PceWarning::Disagree`]).
+pub const DISAGREEMENT: f64 = 2.0;
+
+/// Errors below this are not compared: at a relative error ε no index is off by more than
+/// 2√ε + ε (see [`READABLE_ERROR`]), 0.02 here, whatever the two say.
+pub const NEGLIGIBLE_ERROR: f64 = 1e-4;
+
+/// Largest relative error (MSE / Var on new inputs) at which the indices are still to be read.
+/// The part of the output the expansion gets wrong has variance ε·V; it can hide in any one
+/// term of the variance decomposition, so (with ‖P_u f‖ the part of input set u) each
+/// √V_u is off by at most √(εV): an input shown with index 0 may truly have index ε, and an
+/// index S may truly be (√S ± √ε)², off by up to 2√(Sε) + ε. At ε = 0.1 an input shown as
+/// negligible may carry a tenth of the variance, above the usual screening levels (0.05–0.1),
+/// and a leading index of 0.3 may be off by 0.45: the indices no longer answer which inputs
+/// matter.
+pub const READABLE_ERROR: f64 = 0.1;
+
+/// What the reported errors of one output say about trusting it.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "warning", rename_all = "snake_case")]
+pub enum PceWarning {
+    /// Two errors disagree by more than [`DISAGREEMENT`] times, the larger above
+    /// [`NEGLIGIBLE_ERROR`]: the smaller one is not an error on new inputs (the rule's own score
+    /// does not see the term search, or the estimate is off); trust the larger.
+    Disagree {
+        /// The smaller error.
+        low: ErrorName,
+        /// Its value.
+        low_value: f64,
+        /// The larger error.
+        high: ErrorName,
+        /// Its value.
+        high_value: f64,
+    },
+    /// The largest estimate of the error on new inputs (selection-aware or validation) is above
+    /// [`READABLE_ERROR`]: the indices should not be read.
+    LargeError {
+        /// Which error.
+        error: ErrorName,
+        /// Its value.
+        value: f64,
+        /// The limit ([`READABLE_ERROR`]).
+        limit: f64,
+    },
+}
+
+impl std::fmt::Display for PceWarning {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match *self {
+            PceWarning::Disagree {
+                low,
+                low_value,
+                high,
+                high_value,
+            } => write!(
+                f,
+                "{low} {low_value:.3e} and {high} {high_value:.3e} disagree by more than a factor \
+                 {DISAGREEMENT}: the {low} is not an error on new inputs; trust the {high}"
+            ),
+            PceWarning::LargeError {
+                error,
+                value,
+                limit,
+            } => write!(
+                f,
+                "{error} {value:.3e} > {limit}: the expansion misses so much of the output that \
+                 its indices should not be read (more runs, another degree, or Sobol')"
+            ),
+        }
+    }
+}
+
+impl PceOutput {
+    /// The output with its [`PceOutput::warnings`] derived from its errors under `selection`.
+    fn assessed(mut self, selection: Selection) -> Self {
+        let named = |name: ErrorName, v: f64| v.is_finite().then_some((name, v));
+        let rule = match selection {
+            Selection::CorrectedLoo => named(ErrorName::CorrectedLoo, self.loo_error),
+            // the K-fold score is the selection-aware estimate
+            Selection::KFold { .. } => None,
+        };
+        let estimate = named(ErrorName::SelectionAware, self.selection_aware_error);
+        let validation = self
+            .validation_error
+            .and_then(|v| named(ErrorName::Validation, v));
+        let mut warnings = vec![];
+        // the rule's score against the selection-aware estimate, that against the validation
+        let pairs = [(rule, estimate), (estimate.or(rule), validation)];
+        for (a, b) in pairs {
+            let (Some(a), Some(b)) = (a, b) else { continue };
+            let (low, high) = if a.1 <= b.1 { (a, b) } else { (b, a) };
+            if high.1 > NEGLIGIBLE_ERROR && high.1 > DISAGREEMENT * low.1 {
+                warnings.push(PceWarning::Disagree {
+                    low: low.0,
+                    low_value: low.1,
+                    high: high.0,
+                    high_value: high.1,
+                });
+            }
+        }
+        let largest = [estimate.or(rule), validation]
+            .into_iter()
+            .flatten()
+            .max_by(|a, b| a.1.total_cmp(&b.1));
+        if let Some((error, value)) = largest.filter(|l| l.1 > READABLE_ERROR) {
+            warnings.push(PceWarning::LargeError {
+                error,
+                value,
+                limit: READABLE_ERROR,
+            });
+        }
+        self.warnings = warnings;
+        self
+    }
 }
 
 /// A fitted PCE for every output of a model.
@@ -796,18 +977,22 @@ struct Path {
     kmax: usize,
     /// Active-set size from which steps are [`Path::direct`].
     direct_after: usize,
+    /// Whether the path is sized by its own corrected LOO (every path under corrected LOO)
+    /// rather than by hold-out errors (the fold paths under K-fold).
+    by_loo: bool,
 }
 
 impl Path {
     /// Path of row variant `variant` (0: all rows; f + 1: all but fold f); `c0` = Ψ_vᵀy,
     /// `norm2` the squared column norms over the variant's rows; steps are [`Path::direct`] from
-    /// `direct_after` active terms.
+    /// `direct_after` active terms; `by_loo`: sized by its own corrected LOO.
     fn new(
         d: &Design,
         y: &[f64],
         variant: usize,
         kmax: usize,
         direct_after: usize,
+        by_loo: bool,
         norm2: Vec<f64>,
         c0: Vec<f64>,
     ) -> Self {
@@ -857,6 +1042,7 @@ impl Path {
             state: Stop::Running,
             kmax,
             direct_after,
+            by_loo,
         }
     }
 
@@ -1049,16 +1235,18 @@ impl Path {
             f64::INFINITY
         };
         self.cloo.push(loo * corr);
-        let crit = if self.variant > 0 {
+        if self.variant > 0 {
             let b = self.coef(p);
             let mut e = 0.0;
             for (t, &i) in self.hold.iter().enumerate() {
                 let pred: f64 = self.held.iter().zip(&b).map(|(h, bb)| h[t] * bb).sum();
                 e += (y[i] - pred).powi(2);
             }
-            let e = e / self.hold.len() as f64;
-            self.hold_err.push(e);
-            e
+            self.hold_err.push(e / self.hold.len() as f64);
+        }
+        // a fold path under K-fold is sized by its hold-out error, every other by corrected LOO
+        let crit = if self.variant > 0 && !self.by_loo {
+            *self.hold_err.last().expect("pushed")
         } else {
             *self.cloo.last().expect("pushed")
         };
@@ -1068,9 +1256,9 @@ impl Path {
         }
         let rr: f64 = self.resid.iter().map(|a| a * a).sum();
         let patience = 10.max(self.best_p / 5);
-        // a path ends by its own criterion (hold-out error of a fold, corrected LOO without
-        // folds); the full path under K-fold is sized by the folds ([`omp_select`])
-        let own_criterion = self.variant > 0 || d.segs.len() == 1;
+        // a path ends by its own criterion (hold-out error of a fold under K-fold, corrected LOO
+        // under corrected LOO); the full path under K-fold is sized by the folds ([`omp_select`])
+        let own_criterion = self.variant > 0 || self.by_loo;
         let own_end = own_criterion && p - self.best_p >= patience;
         if p >= self.kmax || rr <= 1e-26 * self.y_norm2 || own_end {
             self.state = Stop::Done;
@@ -1078,11 +1266,17 @@ impl Path {
     }
 }
 
-/// Number of K-fold folds (0 under corrected LOO).
-fn folds_of(params: &PceParams) -> usize {
+/// Folds of the selection-aware estimate under corrected LOO (the rule's search repeated on each
+/// fold's training runs, [`PceOutput::selection_aware_error`]).
+pub const LOO_CHECK_FOLDS: usize = 5;
+
+/// Number of folds the runs are split into: K under K-fold; under corrected LOO
+/// [`LOO_CHECK_FOLDS`] for the selection-aware estimate (fewer with fewer than 15 runs, so that
+/// each fold holds at least 3).
+fn folds_of(params: &PceParams, n: usize) -> usize {
     match params.selection {
         Selection::KFold { folds } => folds,
-        Selection::CorrectedLoo => 0,
+        Selection::CorrectedLoo => LOO_CHECK_FOLDS.min(n / 3),
     }
 }
 
@@ -1111,37 +1305,59 @@ struct Fit {
     train_error: f64,
     steps: usize,
     crit: f64,
+    /// [`PceOutput::selection_aware_error`].
+    selection_aware: f64,
 }
 
 /// OMP with the selection rule on one output; `c0[v]` = Ψ_vᵀy and `col_norm2[v]` the squared
-/// column norms for each row variant v.
+/// column norms for each row variant v. `by_loo`: every path is sized by its own corrected LOO
+/// (the fold paths then give the selection-aware estimate); otherwise K-fold. `max_terms`: the
+/// user's limit; without it, half the runs (under corrected LOO, half of each path's own
+/// training runs: the search on a fold is the search on all runs, repeated).
 fn omp_select(
     d: &Design,
     cache: &GramCache,
     col_norm2: &[Vec<f64>],
     y: &[f64],
     c0: Vec<Vec<f64>>,
-    kmax_user: usize,
+    max_terms: Option<usize>,
+    by_loo: bool,
     direct_after: usize,
     parallel: bool,
 ) -> Fit {
     let n = y.len();
-    let folds = if d.segs.len() > 1 { d.segs.len() } else { 0 };
-    let kmax = |nt: usize| kmax_user.min(d.p).min(nt.saturating_sub(2)).max(1);
+    let kmax = |nt: usize| {
+        let user = max_terms.unwrap_or(if by_loo { nt } else { n } / 2).max(1);
+        user.min(d.p).min(nt.saturating_sub(2)).max(1)
+    };
     let mut paths: Vec<Path> = c0
         .into_iter()
         .enumerate()
         .map(|(v, c)| {
             let nt = if v == 0 { n } else { n - d.segs[v - 1].1 };
-            Path::new(d, y, v, kmax(nt), direct_after, col_norm2[v].clone(), c)
+            Path::new(
+                d,
+                y,
+                v,
+                kmax(nt),
+                direct_after,
+                by_loo,
+                col_norm2[v].clone(),
+                c,
+            )
         })
         .collect();
     loop {
-        // The full path (0) only needs to reach the size the folds choose: it follows their
-        // current choice, one step behind, and finishes the remaining steps (if any) alone.
-        let full_target = cv_choice(&paths[1..], usize::MAX).map_or(1, |c| c.0);
+        // Under K-fold the full path (0) only needs to reach the size the folds choose: it
+        // follows their current choice, one step behind, and finishes the remaining steps (if
+        // any) alone. Under corrected LOO every path runs by its own criterion.
+        let full_target = if by_loo {
+            usize::MAX
+        } else {
+            cv_choice(&paths[1..], usize::MAX).map_or(1, |c| c.0)
+        };
         let live = |i: usize, p: &Path| {
-            p.state == Stop::Running && (i > 0 || folds == 0 || p.active.len() < full_target)
+            p.state == Stop::Running && (i > 0 || p.active.len() < full_target)
         };
         if !paths.iter().enumerate().any(|(i, p)| live(i, p)) {
             break;
@@ -1192,7 +1408,7 @@ fn omp_select(
     }
     let full = &paths[0];
     let var_y = full.var_y.max(f64::MIN_POSITIVE);
-    let (p_star, cv_error) = if folds > 0 {
+    let (p_star, cv_error) = if !by_loo {
         let (p, e) = cv_choice(&paths[1..], full.active.len()).unwrap_or((1, f64::INFINITY));
         (p, e / var_y)
     } else {
@@ -1224,13 +1440,30 @@ fn omp_select(
         .get(p_star.saturating_sub(1))
         .copied()
         .unwrap_or(f64::NAN);
+    // under corrected LOO: each fold path's own choice (its smallest corrected LOO) scored on
+    // its held-out rows, weighted by their number
+    let selection_aware = if by_loo {
+        let (mut sum, mut rows) = (0.0, 0);
+        for fp in paths[1..].iter().filter(|fp| fp.best_p > 0) {
+            sum += fp.hold_err[fp.best_p - 1] * fp.hold.len() as f64;
+            rows += fp.hold.len();
+        }
+        if rows > 0 {
+            sum / rows as f64 / var_y
+        } else {
+            f64::NAN
+        }
+    } else {
+        cv_error
+    };
     Fit {
         terms,
         cv_error,
         loo_error: loo,
         train_error: tr / n as f64 / var_y,
         steps: full.active.len(),
-        crit: if folds > 0 { cv_error } else { loo },
+        crit: if by_loo { loo } else { cv_error },
+        selection_aware,
     }
 }
 
@@ -1433,7 +1666,6 @@ pub fn fit_pce(
     for row in xi.chunks_exact_mut(k) {
         problem.to_germ(row);
     }
-    let kmax_user = params.max_terms.unwrap_or(n / 2).max(1);
     let degrees: Vec<usize> = if params.adaptive_degree {
         (1..=params.degree).collect()
     } else {
@@ -1457,7 +1689,8 @@ pub fn fit_pce(
         }
     }
     // One fold partition for all outputs (drawn from the seed); rows are stored fold by fold.
-    let (perm, segs) = fold_order(n, folds_of(params), params.seed);
+    let (perm, segs) = fold_order(n, folds_of(params, n), params.seed);
+    let by_loo = params.selection == Selection::CorrectedLoo;
     let mut inv = vec![0; n];
     for (pos, &r) in perm.iter().enumerate() {
         inv[r] = pos;
@@ -1501,7 +1734,8 @@ pub fn fit_pce(
                         &col_norm2,
                         &ys[o],
                         c0,
-                        kmax_user,
+                        params.max_terms,
+                        by_loo,
                         DIRECT_AFTER,
                         parallel_inner,
                     )
@@ -1576,7 +1810,11 @@ pub fn fit_pce(
                 loo_error: fit.loo_error,
                 train_error: fit.train_error,
                 omp_steps: fit.steps,
+                selection_aware_error: fit.selection_aware,
+                validation_error: None,
+                warnings: vec![],
             }
+            .assessed(params.selection)
         })
         .collect();
     Ok(PceResult {
@@ -1589,15 +1827,25 @@ pub fn fit_pce(
     })
 }
 
-/// Samples `params.n_samples` runs of `model` on `params.sampling` and fits a sparse PCE.
+/// Samples `params.n_samples` runs of `model` on `params.sampling` and fits a sparse PCE; with
+/// [`PceParams::validation`], measures each output's error on that many fresh runs
+/// ([`PceOutput::validation_error`]) and adds the warnings it calls for.
 ///
 /// # Errors
-/// As [`fit_pce`], plus [`Error::ModelOutput`] for non-finite model values.
+/// As [`fit_pce`], plus [`Error::ModelOutput`] for non-finite model values and
+/// [`Error::SampleSize`] for fewer than 2 validation runs.
 pub fn build_pce<M: Model + ?Sized>(
     model: &M,
     problem: &Problem,
     params: &PceParams,
 ) -> Result<PceResult> {
+    if let Some(v) = params.validation.filter(|v| v.n < 2) {
+        return Err(Error::SampleSize {
+            estimator: "PCE validation",
+            n: v.n,
+            min: 2,
+        });
+    }
     let (x, y) = sample_runs(
         model,
         problem,
@@ -1605,8 +1853,28 @@ pub fn build_pce<M: Model + ?Sized>(
         params.n_samples,
         params.seed,
     )?;
-    fit_pce(problem, &x, &y, model.n_outputs(), params)
+    let mut r = fit_pce(problem, &x, &y, model.n_outputs(), params)?;
+    if let Some(v) = params.validation {
+        let seed = v.seed.unwrap_or(params.seed ^ VALIDATION_SEED);
+        let (xv, yv) = sample_runs(model, problem, Sampling::MonteCarlo, v.n, seed)?;
+        let errors: Vec<f64> = (0..r.outputs.len())
+            .into_par_iter()
+            .map(|o| r.validation_error(problem, o, &xv, &yv))
+            .collect();
+        r.outputs = std::mem::take(&mut r.outputs)
+            .into_iter()
+            .zip(errors)
+            .map(|(mut out, e)| {
+                out.validation_error = Some(e);
+                out.assessed(params.selection)
+            })
+            .collect();
+    }
+    Ok(r)
 }
+
+/// Mixed into the PCE seed for the validation runs' design by default.
+const VALIDATION_SEED: u64 = 0x7A11_DA7E;
 
 /// Evaluates `model` on an n-point design: returns (x: n × k, y: n × m), row-major.
 ///
@@ -1639,17 +1907,18 @@ impl PceResult {
         let mut xi = x.to_vec();
         problem.to_germ(&mut xi);
         let out = &self.outputs[o];
-        let p = out.degree;
-        let mut u = vec![0.0; p + 1];
+        let w = out.degree + 1;
+        // ψ₀…ψ_p of every input, once
+        let mut u = vec![0.0; xi.len() * w];
+        for ((v, &g), ui) in xi.iter().zip(&self.germs).zip(u.chunks_exact_mut(w)) {
+            univariate(g, *v, out.degree, ui);
+        }
         out.terms
             .iter()
             .map(|(mi, c)| {
                 c * mi
                     .iter()
-                    .map(|&(v, d)| {
-                        univariate(self.germs[v as usize], xi[v as usize], p, &mut u);
-                        u[d as usize]
-                    })
+                    .map(|&(v, d)| u[v as usize * w + d as usize])
                     .product::<f64>()
             })
             .sum()
@@ -1738,7 +2007,8 @@ mod tests {
     }
 
     /// The two ways a path updates its correlations — Gram column and U = Ψ_vᵀQ, or the direct
-    /// product Ψ_vᵀq — choose the same terms and coefficients, with and without folds.
+    /// product Ψ_vᵀq — choose the same terms and coefficients: corrected LOO without folds and
+    /// with them (the selection-aware estimate), K-fold.
     #[test]
     fn direct_and_gram_updates_agree() {
         let (n, k, deg) = (120, 3, 3);
@@ -1751,7 +2021,8 @@ mod tests {
             .map(|x| (1.3 * x[0]).sin() + 0.4 * x[1] * x[2] + 0.1 * (2.0 * x[2]).cos())
             .collect();
         let basis = multi_indices(k, deg, 1.0);
-        for segs in [vec![(0, n)], vec![(0, 40), (40, 40), (80, 40)]] {
+        let folds = vec![(0, 40), (40, 40), (80, 40)];
+        for (segs, by_loo) in [(vec![(0, n)], true), (folds.clone(), true), (folds, false)] {
             let d = Design::new(&xi, n, k, &germs, deg, &basis, segs);
             let fit = |direct_after: usize| {
                 let c0 = d
@@ -1765,7 +2036,8 @@ mod tests {
                     &d.norms2(),
                     &y,
                     c0,
-                    60,
+                    Some(60),
+                    by_loo,
                     direct_after,
                     false,
                 )
@@ -1773,6 +2045,13 @@ mod tests {
             let (gram, direct) = (fit(usize::MAX), fit(0));
             assert_eq!(gram.steps, direct.steps);
             assert_eq!(gram.terms.len(), direct.terms.len());
+            // without folds there is no estimate beside corrected LOO
+            let (a, b) = (gram.selection_aware, direct.selection_aware);
+            if d.segs.len() > 1 {
+                assert!(a.is_finite() && (a - b).abs() <= 1e-9 * a, "{a} vs {b}");
+            } else {
+                assert!(a.is_nan() && b.is_nan());
+            }
             assert!(gram.terms.len() > 3);
             for (a, b) in gram.terms.iter().zip(&direct.terms) {
                 assert_eq!(a.0, b.0);

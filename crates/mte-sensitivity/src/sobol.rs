@@ -108,6 +108,80 @@ pub struct SobolResult {
     pub convergence: Vec<ConvergencePoint>,
 }
 
+/// Which index of an input.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum IndexKind {
+    /// First order Sᵢ.
+    First,
+    /// Total effect S_Tᵢ.
+    Total,
+}
+
+impl IndexKind {
+    /// The short name used in reports: `S1`, `ST`.
+    pub fn label(self) -> &'static str {
+        match self {
+            IndexKind::First => "S1",
+            IndexKind::Total => "ST",
+        }
+    }
+}
+
+/// An index whose bootstrap interval is wider than the index itself ([`SobolIndices::wide`]).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct WideInterval {
+    /// Which index.
+    pub index: IndexKind,
+    /// Input number.
+    pub input: usize,
+    /// The estimate.
+    pub value: f64,
+    /// Its interval.
+    pub interval: [f64; 2],
+}
+
+impl SobolIndices {
+    /// The first-order and total indices whose interval is wider than the index it brackets
+    /// (high − low > |S|): the estimate is not resolved from 0 at this number of model runs —
+    /// expected for an input without influence, a reason for more runs where the input matters.
+    /// Empty without bootstrap.
+    ///
+    /// ```
+    /// use mte_sensitivity::sobol::{IndexKind, SobolIndices};
+    /// let s = SobolIndices {
+    ///     first: vec![0.5, 0.01], total: vec![0.6, 0.02],
+    ///     first_ci: vec![[0.45, 0.55], [-0.01, 0.03]], total_ci: vec![[0.5, 0.7], [0.0, 0.03]],
+    ///     first_se: vec![], total_se: vec![], second: None, mean: 0.0, variance: 1.0,
+    /// };
+    /// let w = s.wide();
+    /// assert_eq!(w.len(), 2);
+    /// assert_eq!((w[0].index, w[0].input), (IndexKind::First, 1));
+    /// ```
+    pub fn wide(&self) -> Vec<WideInterval> {
+        let kinds = [
+            (IndexKind::First, &self.first, &self.first_ci),
+            (IndexKind::Total, &self.total, &self.total_ci),
+        ];
+        kinds
+            .into_iter()
+            .flat_map(|(index, values, cis)| {
+                values
+                    .iter()
+                    .zip(cis)
+                    .enumerate()
+                    .filter(|(_, (v, ci))| ci[1] - ci[0] > v.abs())
+                    .map(move |(input, (&value, &interval))| WideInterval {
+                        index,
+                        input,
+                        value,
+                        interval,
+                    })
+            })
+            .collect()
+    }
+}
+
 /// Per-thread work buffers of one block: unit design, model inputs, model outputs.
 #[derive(Default)]
 struct Buffers {

@@ -423,6 +423,54 @@ fn s1_st(
     (rows, variance)
 }
 
+/// What a PCE reports of its errors (for many outputs, those of the output with the largest
+/// error on new inputs), each named for what it is.
+fn pce_summary(r: &mte_sensitivity::pce::PceResult) -> String {
+    use mte_sensitivity::pce::{LOO_CHECK_FOLDS, Selection};
+    let on_new = |o: &mte_sensitivity::pce::PceOutput| {
+        o.validation_error
+            .unwrap_or(f64::NEG_INFINITY)
+            .max(o.selection_aware_error)
+    };
+    let worst = r
+        .outputs
+        .iter()
+        .max_by(|a, b| on_new(a).total_cmp(&on_new(b)))
+        .expect("at least one output");
+    let mut s = format!(
+        "PCE ({} output{}): degree {}, {} terms of {} candidates, {} model runs",
+        r.outputs.len(),
+        if r.outputs.len() > 1 {
+            "s, the one with the largest error on new inputs shown"
+        } else {
+            ""
+        },
+        worst.degree,
+        worst.terms.len(),
+        r.n_candidates,
+        r.n_samples
+    );
+    let rel = "mean squared error / variance";
+    match r.params.selection {
+        Selection::KFold { folds } => s.push_str(&format!(
+            "\n  selection-aware error {:.3e}: {folds}-fold CV {rel} (the term search repeated in each fold)",
+            worst.selection_aware_error
+        )),
+        Selection::CorrectedLoo => s.push_str(&format!(
+            "\n  corrected LOO error {:.3e}: the rule's own score; it does not see the term search\
+             \n  selection-aware error {:.3e}: {rel} on held-out runs, the corrected-LOO search repeated in {LOO_CHECK_FOLDS} folds",
+            worst.loo_error, worst.selection_aware_error
+        )),
+    }
+    if let (Some(v), Some(e)) = (r.params.validation, worst.validation_error) {
+        s.push_str(&format!(
+            "\n  validation error {e:.3e}: {rel} on {} fresh model runs",
+            v.n
+        ));
+    }
+    s
+}
+
 /// Sobol' and PCE: the rows (S1, ST) of each output, weighted by its variance.
 fn sobol_like(json: Value, per_output: Vec<(Vec<IndexRow>, f64)>) -> Indices {
     let shares = ["S1", "ST"]
@@ -442,6 +490,7 @@ fn sobol_like(json: Value, per_output: Vec<(Vec<IndexRow>, f64)>) -> Indices {
         rows: per_output.into_iter().map(|p| p.0).collect(),
         shares,
         weights,
+        warnings: vec![],
     }
 }
 
@@ -454,6 +503,73 @@ struct Indices {
     shares: Vec<OverOutputs>,
     /// Weight of each output: its variance (Sobol', PCE) or the sum of its squared effects.
     weights: Vec<f64>,
+    /// What the user must know before reading the indices, one message per output and issue
+    /// (printed, and in result.json `warnings`).
+    warnings: Vec<String>,
+}
+
+impl Study {
+    /// How reports name output `o`: `p07.PX` for a machine, `output 2` for a test model with
+    /// several outputs, `output` for one.
+    fn output_label(&self, o: usize) -> String {
+        match &self.machine {
+            Some(mo) => format!("output {}", mo.outputs[o].0),
+            None if self.model.n_outputs() > 1 => format!("output {}", o + 1),
+            None => "output".into(),
+        }
+    }
+}
+
+/// Warns on stderr: every message when there are few, else the first ones and how many more
+/// result.json holds.
+fn print_warnings(warnings: &[String]) {
+    const SHOWN: usize = 4;
+    let shown = if warnings.len() <= SHOWN + 1 {
+        warnings.len()
+    } else {
+        SHOWN
+    };
+    for w in &warnings[..shown] {
+        eprintln!("warning: {w}");
+    }
+    if shown < warnings.len() {
+        eprintln!(
+            "warning: … and {} more, listed in result.json `warnings`",
+            warnings.len() - shown
+        );
+    }
+}
+
+/// The Sobol' warnings: per output and index, the inputs whose interval is wider than the index.
+fn sobol_warnings(r: &mte_sensitivity::sobol::SobolResult, st: &Study) -> Vec<String> {
+    use mte_sensitivity::sobol::IndexKind;
+    let mut out = vec![];
+    for (o, ix) in r.outputs.iter().enumerate() {
+        let wide = ix.wide();
+        for kind in [IndexKind::First, IndexKind::Total] {
+            let list: Vec<String> = wide
+                .iter()
+                .filter(|w| w.index == kind)
+                .map(|w| {
+                    format!(
+                        "{} {:.3} [{:.3}, {:.3}]",
+                        r.names[w.input], w.value, w.interval[0], w.interval[1]
+                    )
+                })
+                .collect();
+            if !list.is_empty() {
+                out.push(format!(
+                    "{}: {} interval wider than the index, not resolved from 0 at {} model runs: \
+                     {}",
+                    st.output_label(o),
+                    kind.label(),
+                    r.n_model_runs,
+                    list.join(", ")
+                ));
+            }
+        }
+    }
+    out
 }
 
 /// Squared effects normalised per output (0 for an output without effect), and their sum: for a linear model with independent
@@ -485,40 +601,57 @@ fn analyse(args: &Args, v: &Value, st: &Study, path: &Path) -> Result<Indices, C
             })
             .map_err(|e| lib(e, path))?;
             bar.finish_and_clear();
+            let intervals = if p.n_bootstrap > 0 {
+                format!(
+                    "{:.0} % bootstrap intervals ({} replicates)",
+                    100.0 * r.confidence,
+                    p.n_bootstrap
+                )
+            } else {
+                "no intervals (n_bootstrap = 0)".into()
+            };
+            eprintln!(
+                "Sobol' ({} output{}): N = {} base samples, {} model runs, {intervals}",
+                r.outputs.len(),
+                if r.outputs.len() > 1 { "s" } else { "" },
+                r.n,
+                r.n_model_runs
+            );
             let json = serde_json::to_value(&r).expect("serialisable");
-            sobol_like(
+            let mut ix = sobol_like(
                 json,
                 r.outputs
                     .iter()
                     .map(|o| s1_st(&o.first, &o.first_ci, &o.total, &o.total_ci, o.variance))
                     .collect(),
-            )
+            );
+            ix.warnings = sobol_warnings(&r, st);
+            ix
         }
         Method::Pce => {
             let p: mte_sensitivity::pce::PceParams = params(v, "pce", path)?;
             let r =
                 mte_sensitivity::pce::build_pce(&model, problem, &p).map_err(|e| lib(e, path))?;
-            let worst = r
-                .outputs
-                .iter()
-                .max_by(|a, b| a.cv_error.total_cmp(&b.cv_error))
-                .expect("at least one output");
-            eprintln!(
-                "PCE ({} outputs, worst shown): degree {}, {} terms, K-fold CV error {:.3e}, corrected LOO {:.3e}",
-                r.outputs.len(),
-                worst.degree,
-                worst.terms.len(),
-                worst.cv_error,
-                worst.loo_error
-            );
+            eprintln!("{}", pce_summary(&r));
             let json = serde_json::to_value(&r).expect("serialisable");
-            sobol_like(
+            let mut ix = sobol_like(
                 json,
                 r.outputs
                     .iter()
                     .map(|o| s1_st(&o.first, &o.first_ci, &o.total, &o.total_ci, o.variance))
                     .collect(),
-            )
+            );
+            ix.warnings = r
+                .outputs
+                .iter()
+                .enumerate()
+                .flat_map(|(o, out)| {
+                    out.warnings
+                        .iter()
+                        .map(move |w| format!("{}: {w}", st.output_label(o)))
+                })
+                .collect();
+            ix
         }
         Method::Morris => {
             let p: mte_sensitivity::morris::MorrisParams = params(v, "morris", path)?;
@@ -545,6 +678,7 @@ fn analyse(args: &Args, v: &Value, st: &Study, path: &Path) -> Result<Indices, C
                 rows,
                 shares: vec![("mu_star_share".into(), sh, vec![])],
                 weights,
+                warnings: vec![],
             }
         }
         Method::Local => {
@@ -560,6 +694,7 @@ fn analyse(args: &Args, v: &Value, st: &Study, path: &Path) -> Result<Indices, C
                 rows,
                 shares: vec![("variance_share".into(), sh, vec![])],
                 weights,
+                warnings: vec![],
             }
         }
     })
@@ -611,7 +746,8 @@ pub fn run(args: &Args) -> Result<(), CliError> {
         .map_err(|e| CliError::Library(format!("{}: line {}: {e}", path.display(), e.line())))?;
     let st = study(&v, path)?;
     let names = st.problem.names();
-    let ix = analyse(args, &v, &st, path)?;
+    let mut ix = analyse(args, &v, &st, path)?;
+    print_warnings(&ix.warnings);
     std::fs::create_dir_all(&args.out).map_err(|source| CliError::Io {
         path: args.out.clone(),
         source,
@@ -621,6 +757,9 @@ pub fn run(args: &Args) -> Result<(), CliError> {
         std::fs::write(&p, s).map_err(|source| CliError::Io { path: p, source })
     };
     let Some(mo) = &st.machine else {
+        if let Value::Object(o) = &mut ix.json {
+            o.insert("warnings".into(), ix.warnings.clone().into());
+        }
         write(
             "result.json",
             serde_json::to_string_pretty(&ix.json).expect("json"),
@@ -745,6 +884,7 @@ pub fn run(args: &Args) -> Result<(), CliError> {
             "indices": agg_json,
         },
         "result": ix.json,
+        "warnings": ix.warnings,
     });
     write(
         "result.json",
