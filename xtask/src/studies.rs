@@ -530,7 +530,14 @@ pub fn power(
     n: usize,
     base_seed: u64,
 ) -> Vec<PowerCell> {
-    power_with(kind, effect, sizes, n, base_seed, &user_model_lacking(effect))
+    power_with(
+        kind,
+        effect,
+        sizes,
+        n,
+        base_seed,
+        &user_model_lacking(effect),
+    )
 }
 
 /// Power of `effect` in `kind` datasets at each of `sizes`, `n` datasets per size.

@@ -55,7 +55,9 @@ pub(crate) fn sin_cos_columns(values: &[f64], period: f64) -> DMat {
 /// For a rotary axis, the harmonics of a turn (an error that repeats every turn has no other
 /// periods): 1 … 8, and up to the 180th (2°, a worm wheel's tooth period) as far as the
 /// sampling resolves them without aliasing. For a linear axis, uniform in frequency (twice the
-/// Fourier resolution 1/travel) from travel ÷ 1.5 (longer periods are a polynomial trend) down to the shortest period the sampling
+/// Fourier resolution 1/travel) from travel ÷ 2 (at least two periods in the travel: a longer wave
+/// is a smooth component error, which polynomials and the base's completion describe) down to
+/// the shortest period the sampling
 /// can tell from its aliases: 2.5 × the alias period of the target positions (see
 /// [`alias_period`]), and never below travel ÷ 1000 or 1 mm. ISO 230-2 asks for irregular target
 /// spacing precisely so that a ball-screw pitch shorter than the mean step is still seen; on a
@@ -80,7 +82,7 @@ pub(crate) fn periods_to_scan(values: &[f64], rotary: bool) -> Vec<f64> {
     let lo = alias_period(&positions, shortest_resolvable)
         .map_or(shortest_resolvable, |alias| 2.5 * alias)
         .max(shortest_resolvable);
-    let hi = travel / 1.5;
+    let hi = travel / 2.0;
     if hi.partial_cmp(&lo) != Some(std::cmp::Ordering::Greater) {
         return Vec::new();
     }
@@ -181,7 +183,7 @@ mod tests {
         assert!((alias_period(&x, 1.0).unwrap() - 10.0).abs() < 0.05);
         let p = periods_to_scan(&x, false);
         assert!((p[0] - 2.5 * alias_period(&x, 1.0).unwrap()).abs() < 1e-9);
-        assert!((p[p.len() - 1] - 700.0 / 1.5).abs() < 1e-9);
+        assert!((p[p.len() - 1] - 700.0 / 2.0).abs() < 1e-9);
         assert!(p.windows(2).all(|w| w[1] > w[0]));
     }
 

@@ -260,7 +260,12 @@ pub fn physical_effects(
                 } else {
                     1
                 };
-                for degree in first..=3 {
+                // An error of a rotary axis that turns a full turn repeats every turn: its
+                // harmonics are the periodic candidates; a polynomial in the angle is no error
+                // motion there.
+                let (lo, hi) = crate::basis::range(&values);
+                let full_turn = rotary && hi - lo > 0.8 * std::f64::consts::TAU;
+                for degree in (first..=3).filter(|_| !full_turn) {
                     let cols = slot.modulated(&values, &|s| legendre_columns(s, first..=degree));
                     out.push(Box::new(
                         term(
@@ -515,8 +520,9 @@ impl BaseModelSpec {
 
 impl BaseModelSpec {
     /// The completions of the spec's component errors: for every component error in the base,
-    /// its next polynomial degrees (up to [`MAX_COMPONENT_DEGREE`]) or harmonics (up to
-    /// [`MAX_COMPONENT_HARMONIC`]), one at a time, each after the one before. Real component
+    /// its next polynomial degrees (up to [`MAX_COMPONENT_DEGREE`], [`COMPLETION_BLOCK`] at a
+    /// time) or harmonics (up to [`MAX_COMPONENT_HARMONIC`], one at a time), each block after the
+    /// one before. Real component
     /// errors are smooth functions, not polynomials of the degree a user happens to state; the
     /// diagnosis adds these when the data ask for them, before it looks for causes.
     pub fn completions(&self, obs: &Observations, slots: &[SlotEffect]) -> Vec<Box<dyn Candidate>> {
@@ -536,18 +542,25 @@ impl BaseModelSpec {
             } else {
                 MAX_COMPONENT_DEGREE
             };
+            // Orders in blocks: a smooth error's remainder spreads over several orders, which
+            // one at a time would not reveal.
+            let step = if rotary { 1 } else { COMPLETION_BLOCK };
             let mut after: Option<String> = None;
-            for order in hi + 1..=top {
-                let Some(cols) = component_columns(obs, slot, order, order) else {
+            for first in (hi + 1..=top).step_by(step) {
+                let last = (first + step - 1).min(top);
+                let Some(cols) = component_columns(obs, slot, first, last) else {
                     break;
                 };
-                let (name, what) = if rotary {
-                    (
-                        format!("{} H{order}", slot.name),
-                        format!("harmonic {order} of a turn"),
-                    )
-                } else {
-                    (format!("{} P{order}", slot.name), format!("degree {order}"))
+                let (name, what) = match (rotary, first == last) {
+                    (true, _) => (
+                        format!("{} H{first}", slot.name),
+                        format!("harmonic {first} of a turn"),
+                    ),
+                    (false, true) => (format!("{} P{first}", slot.name), format!("degree {first}")),
+                    (false, false) => (
+                        format!("{} P{first}-{last}", slot.name),
+                        format!("degrees {first} to {last}"),
+                    ),
                 };
                 let term = Term {
                     coefficients: (0..cols.ncols())
@@ -574,6 +587,9 @@ impl BaseModelSpec {
 
 /// Highest polynomial degree the base's component errors of a linear axis are completed to.
 pub const MAX_COMPONENT_DEGREE: usize = 10;
+
+/// Polynomial degrees a completion adds at once.
+pub const COMPLETION_BLOCK: usize = 3;
 
 /// Highest harmonic of a turn the base's component errors of a rotary axis are completed to.
 pub const MAX_COMPONENT_HARMONIC: usize = 6;

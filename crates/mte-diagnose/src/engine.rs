@@ -350,18 +350,47 @@ pub fn diagnose(
         base_sol.dof(),
     );
 
-    let mut terms: Vec<Term> = base.clone();
-    terms.extend(search.chosen.iter().map(|c| c.term.clone()));
-    let x = design(&terms.iter().collect::<Vec<_>>(), n);
-    let sol = solve(&x, &obs.values, &w);
-    let cv = folds.residuals(&x, &obs.values, &w);
-    let extended = quality(obs, &sol, &cv);
-    let scale = covariance_scale(obs, extended.sigma0);
-    let (cov, hyper_u) = covariance_with_hyper(&searcher, &search.chosen, &x, &sol, &w);
-    let extended_parameters = parameters(&terms, &sol.coef, &(cov * scale));
-    let finals = searcher.removal_p_values(&search.chosen, &w, &sol);
-    let findings: Vec<Finding> = search
-        .chosen
+    // The final model. A cause whose size the data do not determine once the uncertainty of its
+    // period or time constant is counted (every estimate within 2 u of zero) is not earned: it
+    // leaves, the least determined first, with what builds on it.
+    let mut chosen = search.chosen;
+    let mut pruned = search.pruned;
+    let (terms, x, sol, extended, scale, hyper_u, extended_parameters) = loop {
+        let mut terms: Vec<Term> = base.clone();
+        terms.extend(chosen.iter().map(|c| c.term.clone()));
+        let x = design(&terms.iter().collect::<Vec<_>>(), n);
+        let sol = solve(&x, &obs.values, &w);
+        let cv = folds.residuals(&x, &obs.values, &w);
+        let extended = quality(obs, &sol, &cv);
+        let scale = covariance_scale(obs, extended.sigma0);
+        let (cov, hyper_u) = covariance_with_hyper(&searcher, &chosen, &x, &sol, &w);
+        let extended_parameters = parameters(&terms, &sol.coef, &(cov * scale));
+        let weakest = (0..chosen.len())
+            .map(|k| {
+                let e = &extended_parameters[base.len() + k].estimates;
+                let z = e
+                    .iter()
+                    .map(|e| e.value.abs() / e.uncertainty.max(1e-300))
+                    .fold(0.0, f64::max);
+                (k, z)
+            })
+            .filter(|(_, z)| *z < 2.0)
+            .min_by(|a, b| a.1.total_cmp(&b.1));
+        let Some((k, _)) = weakest else {
+            break (terms, x, sol, extended, scale, hyper_u, extended_parameters);
+        };
+        let name = chosen.remove(k).term.name;
+        chosen.retain(|c| {
+            let dependent = searcher.candidate(c.entry).requires() == Some(name.as_str());
+            if dependent {
+                pruned.push(c.term.name.clone());
+            }
+            !dependent
+        });
+        pruned.push(name);
+    };
+    let finals = searcher.removal_p_values(&chosen, &w, &sol);
+    let findings: Vec<Finding> = chosen
         .iter()
         .enumerate()
         .map(|(k, c)| Finding {
@@ -448,7 +477,7 @@ pub fn diagnose(
         structure,
         steps: search.steps,
         findings,
-        pruned: search.pruned,
+        pruned,
         not_separable: search.not_separable,
         extended,
         extended_parameters,
@@ -614,8 +643,10 @@ impl Searcher<'_> {
             let mut best: Option<(usize, f64)> = None;
             for &ci in &eligible {
                 let t = &self.pool.variants[ci][0];
+                // A block of orders may hold some the model already has (confounded components
+                // of a point measurement): it is tested on the new directions it brings.
                 let inc = projector.increment(&t.columns, &sol.residuals);
-                if inc.separability < SEPARABILITY_TOLERANCE || inc.new_rank < t.width() {
+                if inc.new_rank == 0 {
                     used[ci] = true;
                     continue;
                 }
@@ -627,7 +658,15 @@ impl Searcher<'_> {
             match best {
                 Some((ci, p)) if p * (eligible.len() as f64) < COMPLETION_LEVEL => {
                     used[ci] = true;
-                    done.push(self.pool.variants[ci][0].clone());
+                    // Only the block's columns the model does not have yet.
+                    let mut with: Vec<Term> = terms.into_iter().cloned().collect();
+                    with.push(self.pool.variants[ci][0].clone());
+                    let (kept, _) = separable_base(with, w);
+                    let name = &self.pool.variants[ci][0].name;
+                    match kept.into_iter().last().filter(|t| &t.name == name) {
+                        Some(t) => done.push(t),
+                        None => continue,
+                    }
                 }
                 _ => break,
             }
