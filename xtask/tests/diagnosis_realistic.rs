@@ -50,30 +50,31 @@ fn hidden_axis_effects_are_named_and_sized() {
 }
 
 #[test]
-fn hidden_tracker_pitch_is_named() {
+fn hidden_tracker_pitch_names_no_other_cause() {
+    // Half the generator's target layouts are grids of 5–7 X positions, which cannot resolve a
+    // 5–40 mm pitch at all (its power is in docs/diagnosis-studies.md); whatever is found must be
+    // the pitch, and on the resolvable layouts it is found.
     let cells = studies::power(Kind::Tracker, Effect::Pitch, &[3.0], 4, SEED);
     let c = &cells[0];
     assert_eq!(c.errors, 0);
+    assert!(c.named_right >= 1, "{:?}", c.names);
     assert!(
-        c.named_right + 1 >= c.n,
-        "named right in {} of {}: {:?}",
-        c.named_right,
-        c.n,
+        c.names
+            .iter()
+            .all(|(name, _)| name.starts_with("EXX periodic")),
+        "another cause named: {:?}",
         c.names
     );
 }
 
 #[test]
-fn open_world_sawtooth_is_not_a_confident_wrong_cause() {
-    // A sawtooth positioning error is no candidate's shape: the right answer is structure the
-    // library does not explain, not a cause declared to explain the data.
-    let o = studies::openworld(Kind::Axis, Effect::Sawtooth, 2.0, 6, SEED);
+fn open_world_drift_that_rises_and_falls_is_reported_unexplained() {
+    // A pivot drift that rises and falls over repeated R-test cycles has no candidate's shape:
+    // the right answer is structure the library does not explain (with the nearest drift named
+    // beside it), never a cause declared to explain the data, nor "no discrepancy". One dataset:
+    // these multi-cycle datasets are the slowest to diagnose (the study runs many).
+    let o = studies::openworld(Kind::Rtest, Effect::RiseFall, 15.0, 1, SEED);
     assert_eq!(o.errors, 0);
-    assert!(
-        o.confident_wrong <= 1,
-        "{} of {} confident wrong causes: {:?}",
-        o.confident_wrong,
-        o.n,
-        o.names
-    );
+    assert_eq!(o.confident_wrong, 0, "{:?}", o.names);
+    assert_eq!(o.nothing, 0, "{:?}", o.names);
 }
