@@ -370,6 +370,9 @@ pub(crate) fn base_spec(
     })
 }
 
+/// A base model's terms and the completions of its component errors.
+pub(crate) type BaseTerms = (Vec<Term>, Vec<Box<dyn Candidate>>);
+
 /// The base terms of `spec` on these slots (named terms looked up in the slots' candidates),
 /// and the completions of its component errors ([`BaseModelSpec::completions`]).
 pub(crate) fn spec_terms(
@@ -378,7 +381,7 @@ pub(crate) fn spec_terms(
     slots: &[SlotEffect],
     location: &[String],
     manifest_path: &Path,
-) -> Result<(Vec<Term>, Vec<Box<dyn Candidate>>)> {
+) -> Result<BaseTerms> {
     let named = if spec.terms.is_empty() {
         Vec::new()
     } else {

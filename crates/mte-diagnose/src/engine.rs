@@ -1024,7 +1024,10 @@ impl Searcher<'_> {
         let obs = self.obs;
         let n = obs.len();
         let outer = Folds::blocked(obs, &vec![true; n], k, self.params.blocks_per_fold);
-        let runs: Vec<(Vec<(usize, f64, f64)>, Vec<String>)> = outer
+        // Per fold: (observation, base residual, diagnosed residual) of its held-out rows, and
+        // the causes its search named.
+        type FoldRun = (Vec<(usize, f64, f64)>, Vec<String>);
+        let runs: Vec<FoldRun> = outer
             .test
             .par_iter()
             .map(|test| {

@@ -286,7 +286,7 @@ impl Projector {
             cw.row_mut(i).scale_mut(*wi);
         }
         let norms: Vec<f64> = cw.column_iter().map(|c| c.norm()).collect();
-        if norms.iter().any(|n| !(*n > 0.0)) {
+        if norms.iter().any(|n| n.is_nan() || *n <= 0.0) {
             return none;
         }
         let rw = r.component_mul(&self.w);

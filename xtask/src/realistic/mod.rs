@@ -288,10 +288,10 @@ pub fn write(kind: Kind, hidden: &[Hidden], seed: u64, dir: &Path) -> std::io::R
     write_spec(&Spec::new(kind, hidden), seed, dir)
 }
 
-/// [`write`] with every option.
+/// [`write()`] with every option.
 ///
 /// # Errors
-/// As [`write`].
+/// As [`write()`].
 pub fn write_spec(spec: &Spec, seed: u64, dir: &Path) -> std::io::Result<Truth> {
     std::fs::create_dir_all(dir)?;
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
