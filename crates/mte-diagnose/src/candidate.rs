@@ -460,20 +460,10 @@ impl BaseModelSpec {
                     } else {
                         format!("polynomial up to degree {hi}")
                     };
-                    let name = format!("{} poly{degree}", slot.name);
-                    out.push(Term {
-                        coefficients: (0..cols.ncols())
-                            .map(|k| (format!("{name}[{k}]"), slot.quantity))
-                            .collect(),
-                        name,
-                        label: format!("{}, {what}", slot.label),
-                        meaning: slot.meaning.clone(),
-                        family: Family::Base,
-                        columns: cols,
-                        summary: Summary::EachCoefficient,
-                        exposed_by: component_axis(slot),
-                        separated_by: slot.separated_by.clone(),
-                    });
+                    out.push(
+                        component_term(slot, format!("{} poly{degree}", slot.name), &what, cols)
+                            .separated_by_opt(slot.separated_by.clone()),
+                    );
                 }
                 _ => {}
             }
@@ -562,19 +552,7 @@ impl BaseModelSpec {
                         format!("degrees {first} to {last}"),
                     ),
                 };
-                let term = Term {
-                    coefficients: (0..cols.ncols())
-                        .map(|k| (format!("{name}[{k}]"), slot.quantity))
-                        .collect(),
-                    name: name.clone(),
-                    label: format!("{}, {what}", slot.label),
-                    meaning: slot.meaning.clone(),
-                    family: Family::Base,
-                    columns: cols,
-                    summary: Summary::EachCoefficient,
-                    exposed_by: component_axis(slot),
-                    separated_by: None,
-                };
+                let term = component_term(slot, name.clone(), &what, cols);
                 out.push(Box::new(Completion {
                     term,
                     after: after.replace(name),
@@ -593,6 +571,23 @@ pub const COMPLETION_BLOCK: usize = 3;
 
 /// Highest harmonic of a turn the base's component errors of a rotary axis are completed to.
 pub const MAX_COMPONENT_HARMONIC: usize = 6;
+
+/// A base term of a component slot's basis columns.
+fn component_term(slot: &SlotEffect, name: String, what: &str, cols: DMat) -> Term {
+    Term {
+        coefficients: (0..cols.ncols())
+            .map(|k| (format!("{name}[{k}]"), slot.quantity))
+            .collect(),
+        name,
+        label: format!("{}, {what}", slot.label),
+        meaning: slot.meaning.clone(),
+        family: Family::Base,
+        columns: cols,
+        summary: Summary::EachCoefficient,
+        exposed_by: component_axis(slot),
+        separated_by: None,
+    }
+}
 
 /// The axis of a component slot.
 fn component_axis(slot: &SlotEffect) -> Option<String> {

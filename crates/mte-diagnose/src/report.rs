@@ -238,38 +238,13 @@ pub fn markdown(d: &Diagnosis, title: &str) -> String {
             p_text(t.p_value)
         );
     }
-    if !d.base_not_separable.is_empty() {
-        let _ = writeln!(s, "\n## Base parameters these data cannot separate\n");
-        for n in &d.base_not_separable {
-            let _ = writeln!(
-                s,
-                "- {} ({}) is a combination of {}: left out of the fit.{}",
-                n.name,
-                n.label,
-                n.confounded_with.join(", "),
-                n.separated_by
-                    .as_ref()
-                    .map(|h| format!(" Separate it with {h}."))
-                    .unwrap_or_default()
-            );
-        }
-    }
-    if !d.not_separable.is_empty() {
-        let _ = writeln!(s, "\n## Not separable with this data\n");
-        for n in &d.not_separable {
-            let _ = writeln!(
-                s,
-                "- {} ({}) is a combination of {}.{}",
-                n.name,
-                n.label,
-                n.confounded_with.join(", "),
-                n.separated_by
-                    .as_ref()
-                    .map(|h| format!(" Separate it with {h}."))
-                    .unwrap_or_default()
-            );
-        }
-    }
+    not_separable_section(
+        &mut s,
+        "Base parameters these data cannot separate",
+        &d.base_not_separable,
+        ": left out of the fit",
+    );
+    not_separable_section(&mut s, "Not separable with this data", &d.not_separable, "");
     let _ = writeln!(s, "\n## Search\n");
     for (k, step) in d.steps.iter().enumerate() {
         let ranked: Vec<String> = step
@@ -304,6 +279,32 @@ pub fn markdown(d: &Diagnosis, title: &str) -> String {
         );
     }
     s
+}
+
+/// A section listing what the data cannot separate and with what it is confounded.
+fn not_separable_section(
+    s: &mut String,
+    title: &str,
+    items: &[crate::engine::NotSeparable],
+    consequence: &str,
+) {
+    if items.is_empty() {
+        return;
+    }
+    let _ = writeln!(s, "\n## {title}\n");
+    for n in items {
+        let _ = writeln!(
+            s,
+            "- {} ({}) is a combination of {}{consequence}.{}",
+            n.name,
+            n.label,
+            n.confounded_with.join(", "),
+            n.separated_by
+                .as_ref()
+                .map(|h| format!(" Separate it with {h}."))
+                .unwrap_or_default()
+        );
+    }
 }
 
 /// Where the unexplained structure is, in words.

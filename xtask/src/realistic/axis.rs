@@ -10,7 +10,9 @@ use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, Normal};
 
 use super::smooth::{Smooth, signed};
-use super::{EffectKind, Hidden, Kind, Spec, TrueEffect, Truth, sawtooth, unsupported};
+use super::{
+    EffectKind, Hidden, Kind, Spec, TrueEffect, Truth, sawtooth, unsupported, write_manifest,
+};
 
 /// The stated noise a user writes: the true σ rounded to 0.1 µm (at least 0.1 µm).
 pub fn stated_noise_um(sigma_um: f64) -> f64 {
@@ -188,7 +190,7 @@ pub(crate) fn write(spec: &Spec, rng: &mut ChaCha8Rng, dir: &Path) -> std::io::R
         }
     }
     std::fs::write(dir.join("runs.csv"), csv)?;
-    let mut manifest = serde_json::json!({
+    let manifest = serde_json::json!({
         "format": "mte-dataset/1",
         "kind": "axis",
         "description": "X-axis bidirectional positioning runs (laser interferometer)",
@@ -196,11 +198,7 @@ pub(crate) fn write(spec: &Spec, rng: &mut ChaCha8Rng, dir: &Path) -> std::io::R
         "noise_um": stated_noise_um(sigma.max(0.05)),
         "data": "runs.csv",
     });
-    if let Some(b) = spec.base_model.resolve() {
-        manifest["base_model"] = b;
-    }
-    let path = dir.join("manifest.json");
-    std::fs::write(&path, serde_json::to_string_pretty(&manifest)?)?;
+    let path = write_manifest(dir, manifest, &spec.base_model)?;
     Ok(Truth {
         kind: Kind::Axis,
         manifest: path,

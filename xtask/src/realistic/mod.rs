@@ -288,6 +288,20 @@ pub fn write(kind: Kind, hidden: &[Hidden], seed: u64, dir: &Path) -> std::io::R
     write_spec(&Spec::new(kind, hidden), seed, dir)
 }
 
+/// Writes `manifest.json` in `dir`, with the base model's `base_model` field if it has one.
+fn write_manifest(
+    dir: &Path,
+    mut manifest: serde_json::Value,
+    base_model: &BaseModel,
+) -> std::io::Result<std::path::PathBuf> {
+    if let Some(b) = base_model.resolve() {
+        manifest["base_model"] = b;
+    }
+    let path = dir.join("manifest.json");
+    std::fs::write(&path, serde_json::to_string_pretty(&manifest)?)?;
+    Ok(path)
+}
+
 /// [`write()`] with every option.
 ///
 /// # Errors

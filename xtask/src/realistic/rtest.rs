@@ -25,7 +25,7 @@ use rand_distr::{Distribution, Normal};
 
 use super::geom::{ComponentSizes, Iso, LinearErrors, V3, rot_x, rot_y, rot_z, trans};
 use super::smooth::{Periodic, signed};
-use super::{EffectKind, Hidden, Kind, Spec, TrueEffect, Truth, unsupported};
+use super::{EffectKind, Hidden, Kind, Spec, TrueEffect, Truth, unsupported, write_manifest};
 
 /// A function of time for a location error, mm.
 #[derive(Debug, Clone, Copy)]
@@ -494,7 +494,7 @@ pub(crate) fn write(spec: &Spec, rng: &mut ChaCha8Rng, dir: &Path) -> std::io::R
         dir.join("machine.json"),
         serde_json::to_string_pretty(&m.machine_json())?,
     )?;
-    let mut manifest = serde_json::json!({
+    let manifest = serde_json::json!({
         "format": "mte-rtest/1",
         "machine": "machine.json",
         "instrument": "R-test (three displacement sensors)",
@@ -503,11 +503,7 @@ pub(crate) fn write(spec: &Spec, rng: &mut ChaCha8Rng, dir: &Path) -> std::io::R
         "axes": ["X", "Y", "Z", "B", "C"],
         "setups": setups,
     });
-    if let Some(b) = spec.base_model.resolve() {
-        manifest["base_model"] = b;
-    }
-    let path = dir.join("manifest.json");
-    std::fs::write(&path, serde_json::to_string_pretty(&manifest)?)?;
+    let path = write_manifest(dir, manifest, &spec.base_model)?;
     Ok(Truth {
         kind: Kind::Rtest,
         manifest: path,

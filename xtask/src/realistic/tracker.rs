@@ -19,7 +19,10 @@ use rand_distr::{Distribution, Normal};
 use super::axis::stated_noise_um;
 use super::geom::{Iso, LinearErrors, REALISTIC, V3, rot_x, rot_y, rot_z, trans};
 use super::smooth::{Smooth, signed};
-use super::{EffectKind, Hidden, Kind, LINEAR, Spec, TrueEffect, Truth, sawtooth, unsupported};
+use super::{
+    EffectKind, Hidden, Kind, LINEAR, Spec, TrueEffect, Truth, sawtooth, unsupported,
+    write_manifest,
+};
 
 /// An extra positioning error of one linear axis (hidden pitch or sawtooth), mm.
 #[derive(Debug, Clone, Copy)]
@@ -380,7 +383,7 @@ pub(crate) fn write(spec: &Spec, rng: &mut ChaCha8Rng, dir: &Path) -> std::io::R
             serde_json::json!({"id": format!("S{}", j + 1), "station_mm": a})
         })
         .collect();
-    let mut manifest = serde_json::json!({
+    let manifest = serde_json::json!({
         "format": "mte-dataset/1",
         "kind": "tracker",
         "description": "Laser-tracker multilateration of a three-axis machine",
@@ -390,11 +393,7 @@ pub(crate) fn write(spec: &Spec, rng: &mut ChaCha8Rng, dir: &Path) -> std::io::R
         "targets": "targets.csv",
         "setups": setups,
     });
-    if let Some(b) = spec.base_model.resolve() {
-        manifest["base_model"] = b;
-    }
-    let path = dir.join("manifest.json");
-    std::fs::write(&path, serde_json::to_string_pretty(&manifest)?)?;
+    let path = write_manifest(dir, manifest, &spec.base_model)?;
     Ok(Truth {
         kind: Kind::Tracker,
         manifest: path,
