@@ -1,0 +1,55 @@
+//! The diagnosis on realistic datasets (issue targets: an 8-cycle R-test thermal dataset of
+//! about 5 000 observations in ≤ 3 s, tracker data with a volumetric base and about 2 000
+//! lengths in ≤ 5 s, release, 2 cores). Load and diagnosis, including the 5 outer searches of
+//! the honest held-out figures.
+//!
+//! cargo bench -p xtask --bench diagnose
+#![allow(missing_docs)]
+
+use criterion::{Criterion, criterion_group, criterion_main};
+use std::hint::black_box;
+use xtask::realistic::{Hidden, Kind, Spec, write_spec};
+
+fn bench(c: &mut Criterion) {
+    let dir = std::env::temp_dir().join(format!("mte-bench-diagnose-{}", std::process::id()));
+    let mut group = c.benchmark_group("diagnose");
+    group.sample_size(10);
+    let mut rtest = Spec::new(
+        Kind::Rtest,
+        &[Hidden::PivotDrift {
+            rotary: 0,
+            um: 20.0,
+            tau_s: 1800.0,
+        }],
+    );
+    rtest.cycles = Some(8);
+    let tracker = Spec::new(Kind::Tracker, &[]);
+    for (name, spec, noise) in [
+        ("rtest_8_cycles", rtest, Some(0.5)),
+        ("tracker_volumetric", tracker, None),
+    ] {
+        let truth = write_spec(&spec, 11, &dir.join(name)).expect("dataset written");
+        let prepared =
+            || mte_diagnose::load_with_noise(&truth.manifest, noise).expect("dataset loads");
+        eprintln!("{name}: {} observations", truth.n_observations);
+        group.bench_function(name, |b| {
+            b.iter(|| {
+                let p = prepared();
+                black_box(
+                    mte_diagnose::diagnose(
+                        &p.observations,
+                        p.base,
+                        &p.candidates,
+                        &mte_diagnose::DiagnoseParams::default(),
+                    )
+                    .expect("diagnosis runs"),
+                )
+            })
+        });
+    }
+    group.finish();
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+criterion_group!(benches, bench);
+criterion_main!(benches);
