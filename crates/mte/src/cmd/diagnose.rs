@@ -116,7 +116,7 @@ fn residual_svg(d: &Diagnosis, index: usize) -> String {
         let _ = root.fill(&WHITE);
         let title = match &s.finding {
             Some(name) => format!(
-                "{name}: residuals without it against {} (dots), fitted effect (dark)",
+                "{name}: residuals without it against {} (grey), fitted effect (red crosses)",
                 s.variable
             ),
             None => format!(
@@ -149,7 +149,7 @@ fn residual_svg(d: &Diagnosis, index: usize) -> String {
                     .collect()
             };
             let residual_style = RGBColor(120, 140, 170).mix(0.5).filled();
-            let effect_style = RGBColor(200, 40, 20).filled();
+            let effect_style = RGBColor(210, 30, 20).stroke_width(2);
             let _ = chart.draw_series(
                 points(&residual)
                     .into_iter()
@@ -159,7 +159,7 @@ fn residual_svg(d: &Diagnosis, index: usize) -> String {
                 let _ = chart.draw_series(
                     points(&effect)
                         .into_iter()
-                        .map(|p| Circle::new(p, 1, effect_style)),
+                        .map(|p| Cross::new(p, 4, effect_style)),
                 );
             }
         }
