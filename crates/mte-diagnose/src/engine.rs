@@ -379,15 +379,7 @@ pub fn diagnose(
         let Some((k, _)) = weakest else {
             break (terms, x, sol, extended, scale, hyper_u, extended_parameters);
         };
-        let name = chosen.remove(k).term.name;
-        chosen.retain(|c| {
-            let dependent = searcher.candidate(c.entry).requires() == Some(name.as_str());
-            if dependent {
-                pruned.push(c.term.name.clone());
-            }
-            !dependent
-        });
-        pruned.push(name);
+        pruned.extend(searcher.remove(&mut chosen, k));
     };
     let finals = searcher.removal_p_values(&chosen, &w, &sol);
     let findings: Vec<Finding> = chosen
@@ -952,13 +944,7 @@ impl Searcher<'_> {
             let cv_full = folds.rms(&folds.residuals(&x, y, w));
             let mut weakest: Option<(usize, f64, f64)> = None; // (index, p, cv ratio)
             for j in 0..chosen.len() {
-                let reduced = self.with(chosen, Some(j));
-                let xr = design(&reduced.iter().collect::<Vec<_>>(), n);
-                let sr = solve(&xr, y, w);
-                let k = sol.rank.saturating_sub(sr.rank).max(1);
-                let p = (f_test(sr.rss_w, sr.rss_w - sol.rss_w, k, sol.dof())
-                    * chosen[j].variants_tested as f64)
-                    .min(1.0);
+                let (xr, p) = self.removal_test(chosen, j, w, &sol);
                 let ratio = folds.rms(&folds.residuals(&xr, y, w)) / cv_full.max(1e-300);
                 let fails = p >= self.params.alpha || ratio < 1.0 + 0.5 * self.params.min_gain;
                 if fails && weakest.is_none_or(|(_, bp, br)| p > bp || (p == bp && ratio < br)) {
@@ -966,19 +952,36 @@ impl Searcher<'_> {
                 }
             }
             let Some((j, _, _)) = weakest else { break };
-            let name = chosen[j].term.name.clone();
-            pruned.push(name.clone());
-            chosen.remove(j);
-            // What builds on it goes with it.
-            chosen.retain(|c| {
-                let dependent = self.candidate(c.entry).requires() == Some(name.as_str());
-                if dependent {
-                    pruned.push(c.term.name.clone());
-                }
-                !dependent
-            });
+            pruned.extend(self.remove(chosen, j));
         }
         pruned
+    }
+
+    /// Removes chosen term `j` and what builds on it; returns their names, `j`'s first.
+    fn remove(&self, chosen: &mut Vec<Chosen>, j: usize) -> Vec<String> {
+        let name = chosen.remove(j).term.name;
+        let mut removed = vec![name];
+        chosen.retain(|c| {
+            let dependent = self.candidate(c.entry).requires() == Some(removed[0].as_str());
+            if dependent {
+                removed.push(c.term.name.clone());
+            }
+            !dependent
+        });
+        removed
+    }
+
+    /// The model without chosen term `j` (and what builds on it): its design, and the
+    /// Bonferroni-adjusted p-value of the removal against the complete model's solution `sol`.
+    fn removal_test(&self, chosen: &[Chosen], j: usize, w: &DVec, sol: &Solution) -> (DMat, f64) {
+        let reduced = self.with(chosen, Some(j));
+        let xr = design(&reduced.iter().collect::<Vec<_>>(), self.obs.len());
+        let sr = solve(&xr, &self.obs.values, w);
+        let k = sol.rank.saturating_sub(sr.rank).max(1);
+        let p = (f_test(sr.rss_w, sr.rss_w - sol.rss_w, k, sol.dof())
+            * chosen[j].variants_tested as f64)
+            .min(1.0);
+        (xr, p)
     }
 
     /// Base terms and chosen terms, without the chosen term `skip` and those that build on it.
@@ -999,18 +1002,7 @@ impl Searcher<'_> {
     /// Adjusted p-value of removing each chosen term from the complete model (solution `sol`).
     fn removal_p_values(&self, chosen: &[Chosen], w: &DVec, sol: &Solution) -> Vec<f64> {
         (0..chosen.len())
-            .map(|j| {
-                let reduced = self.with(chosen, Some(j));
-                let sr = solve(
-                    &design(&reduced.iter().collect::<Vec<_>>(), self.obs.len()),
-                    &self.obs.values,
-                    w,
-                );
-                let k = sol.rank.saturating_sub(sr.rank).max(1);
-                (f_test(sr.rss_w, sr.rss_w - sol.rss_w, k, sol.dof())
-                    * chosen[j].variants_tested as f64)
-                    .min(1.0)
-            })
+            .map(|j| self.removal_test(chosen, j, w, sol).1)
             .collect()
     }
 
