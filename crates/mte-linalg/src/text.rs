@@ -1,4 +1,36 @@
-//! Names in messages: the closest known names to a misspelt one.
+//! Text input and names in messages: reading a user's text file (regular files only, a UTF-8
+//! byte-order mark dropped) and the closest known names to a misspelt one.
+
+use std::io;
+use std::path::Path;
+
+/// Reads a user's text file: refuses anything but a regular file (a FIFO or device would block
+/// or never end) and drops a leading UTF-8 byte-order mark, which editors on Windows write and
+/// which JSON and CSV readers would otherwise reject as "expected value at line 1 column 1".
+///
+/// ```
+/// let dir = std::env::temp_dir().join("mte-linalg-read-text-doc");
+/// std::fs::create_dir_all(&dir).unwrap();
+/// let path = dir.join("bom.json");
+/// std::fs::write(&path, b"\xEF\xBB\xBF{}").unwrap();
+/// assert_eq!(mte_linalg::text::read_text(&path).unwrap(), "{}");
+/// assert!(mte_linalg::text::read_text(&dir).is_err());
+/// ```
+pub fn read_text(path: impl AsRef<Path>) -> io::Result<String> {
+    let path = path.as_ref();
+    let meta = std::fs::metadata(path)?;
+    if !meta.is_file() {
+        return Err(io::Error::new(
+            io::ErrorKind::InvalidInput,
+            "not a regular file (a directory, FIFO or device cannot be read as data)",
+        ));
+    }
+    let text = std::fs::read_to_string(path)?;
+    Ok(match text.strip_prefix('\u{feff}') {
+        Some(rest) => rest.to_string(),
+        None => text,
+    })
+}
 
 /// The `k` names of `known` closest to `name` by edit distance (case-insensitive), closest
 /// first, each once.
