@@ -1,12 +1,13 @@
 #![doc = include_str!("../README.md")]
 
-mod adapters;
 mod basis;
 pub mod candidate;
 pub mod data;
-pub mod dataset;
+mod dataset;
 pub mod engine;
 mod fit;
+pub mod instruments;
+pub mod model;
 pub mod report;
 pub mod structure;
 pub mod term;
@@ -16,8 +17,9 @@ pub use candidate::{
     physical_effects,
 };
 pub use data::{Observations, Variable, VariableKind};
-pub use dataset::{Manifest, Prepared, load, load_with_noise};
 pub use engine::{DiagnoseParams, Diagnosis, Finding, FitQuality, HeldOut, Verdict, diagnose};
+pub use instruments::{load, load_with_noise};
+pub use model::{DriftOf, Effects, ObservationModel, Prepared, prepare};
 pub use structure::StructureTest;
 pub use term::{Estimate, Family, Quantity, Summary, Term};
 

@@ -1,0 +1,260 @@
+//! Bidirectional positioning runs of one axis (laser interferometer, ISO 230-2 style).
+
+use mte_linalg::{DMat, DVec};
+use serde::Deserialize;
+
+use crate::Result;
+use crate::candidate::{SlotEffect, SlotRole};
+use crate::data::{Observations, Variable, VariableKind};
+use crate::dataset::ManifestFile;
+use crate::model::{DriftOf, Effects, ObservationModel};
+use crate::term::{Family, Quantity, Summary, Term};
+
+/// The manifest of axis runs (`"format": "mte-dataset/1"`, `"kind": "axis"`).
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct Manifest {
+    #[allow(dead_code)]
+    format: String,
+    #[allow(dead_code)]
+    kind: String,
+    #[serde(default)]
+    description: Option<String>,
+    data: String,
+    #[serde(default)]
+    noise_um: Option<f64>,
+    #[serde(default)]
+    noise_arcsec: Option<f64>,
+    #[serde(default)]
+    axis: Option<String>,
+    #[serde(default)]
+    base_model: Option<serde_json::Value>,
+}
+
+/// Positioning runs of one axis: columns `run`, `direction` (+1/−1), `<axis>_mm` (or
+/// `<axis>_deg` for a rotary axis), optional `t_s`, and `deviation_um` (measured minus
+/// commanded position; `deviation_arcsec` for a rotary axis).
+pub struct AxisRuns {
+    observations: Observations,
+    axis: String,
+    title: String,
+}
+
+impl AxisRuns {
+    /// Reads the runs a manifest names; `noise_um` applies where the manifest states none.
+    pub(crate) fn read(
+        file: &ManifestFile,
+        noise_um: Option<f64>,
+    ) -> Result<(Self, Option<serde_json::Value>)> {
+        let mut manifest: Manifest = file.parse()?;
+        if manifest.noise_um.is_none() && manifest.noise_arcsec.is_none() {
+            manifest.noise_um = noise_um;
+        }
+        file.check_noise("noise_um", manifest.noise_um)?;
+        file.check_noise("noise_arcsec", manifest.noise_arcsec)?;
+        let table = file.table(&manifest.data)?;
+        let axis = manifest
+            .axis
+            .clone()
+            .ok_or_else(|| file.missing("axis", "the name of the axis measured, e.g. \"X\""))?;
+        let lower = axis.to_lowercase();
+        let (pos_col, rotary) = match (
+            table.column(&format!("{lower}_mm")),
+            table.column(&format!("{lower}_deg")),
+        ) {
+            (Some(c), _) => (c, false),
+            (None, Some(c)) => (c, true),
+            (None, None) => {
+                return Err(table
+                    .error(
+                        table.header_line,
+                        format!("missing column `{lower}_mm` (or `{lower}_deg`) with the commanded position of {axis}"),
+                    )
+                    .into());
+            }
+        };
+        let n = table.len();
+        if n == 0 {
+            return Err(crate::DiagnoseError::Dataset {
+                path: table.source_name.clone(),
+                detail: "no observations".into(),
+            });
+        }
+        let mut position = table.numbers(pos_col)?;
+        if rotary {
+            position.iter_mut().for_each(|p| *p = p.to_radians());
+        }
+        // Linear axes deviate in µm, rotary axes in arcsec (ISO 230-2 units); stored as mm / rad.
+        let (deviation_column, to_internal) = if rotary {
+            ("deviation_arcsec", (1.0f64 / 3600.0).to_radians())
+        } else {
+            ("deviation_um", 1e-3)
+        };
+        if rotary && table.column("deviation_um").is_some() {
+            return Err(table
+                .error(
+                    table.header_line,
+                    format!("column `deviation_um`: {axis} is rotary (`{lower}_deg`), so its deviations are angles: name the column `deviation_arcsec`"),
+                )
+                .into());
+        }
+        let deviation = table.numbers(table.require(deviation_column)?)?;
+        let stated_noise = match (rotary, manifest.noise_um, manifest.noise_arcsec) {
+            (false, noise, None) | (true, None, noise) => noise,
+            (false, _, Some(_)) => {
+                return Err(file.error(format!(
+                    "field `noise_arcsec`: {axis} is linear (`{lower}_mm`); state its noise as `noise_um`"
+                )));
+            }
+            (true, Some(_), _) => {
+                return Err(file.error(format!(
+                    "field `noise_um`: {axis} is rotary (`{lower}_deg`); state its noise as `noise_arcsec`"
+                )));
+            }
+        };
+        let dir_col = table.require("direction")?;
+        let mut direction = Vec::with_capacity(n);
+        for r in 0..n {
+            direction.push(match table.text(r, dir_col) {
+                "+" | "+1" | "1" => 1.0,
+                "-" | "-1" => -1.0,
+                other => {
+                    return Err(table
+                        .error(
+                            table.line(r),
+                            format!("column `direction`: `{other}`, expected + or -"),
+                        )
+                        .into());
+                }
+            });
+        }
+        let run_col = table.require("run")?;
+        let mut setup_names: Vec<String> = Vec::new();
+        let mut setup = Vec::with_capacity(n);
+        for r in 0..n {
+            let id = table.text(r, run_col);
+            let k = setup_names.iter().position(|s| s == id).unwrap_or_else(|| {
+                setup_names.push(id.to_string());
+                setup_names.len() - 1
+            });
+            setup.push(k);
+        }
+        let mut variables = vec![
+            Variable {
+                name: axis.clone(),
+                kind: if rotary {
+                    VariableKind::RotaryAxis
+                } else {
+                    VariableKind::LinearAxis
+                },
+                values: position,
+            },
+            Variable {
+                name: "direction".into(),
+                kind: VariableKind::Direction,
+                values: direction,
+            },
+        ];
+        if let Some(c) = table.column("t_s") {
+            variables.push(Variable {
+                name: "t".into(),
+                kind: VariableKind::Time,
+                values: table.numbers(c)?,
+            });
+        }
+        let observations = Observations {
+            values: DVec::from_iterator(n, deviation.iter().map(|d| d * to_internal)),
+            sigma: stated_noise.map(|s| DVec::from_element(n, s * to_internal)),
+            variables,
+            setup,
+            setup_names,
+            channel: vec![0; n],
+            channel_names: vec!["deviation".into()],
+            setup_kind: "run".into(),
+            quantity: if rotary {
+                Quantity::Angle
+            } else {
+                Quantity::Length
+            },
+        };
+        let title = manifest
+            .description
+            .clone()
+            .unwrap_or_else(|| format!("{axis}-axis positioning runs"));
+        Ok((
+            AxisRuns {
+                observations,
+                axis,
+                title,
+            },
+            manifest.base_model,
+        ))
+    }
+}
+
+impl ObservationModel for AxisRuns {
+    fn observations(&self) -> &Observations {
+        &self.observations
+    }
+
+    /// The axis' positioning error (its own component error, `EXX`) and the instrument's zero;
+    /// with a time column, a scale drift (thermal expansion growing in time).
+    fn effects(&self) -> Effects {
+        let obs = &self.observations;
+        let (n, quantity, axis) = (obs.len(), obs.quantity, &self.axis);
+        let iso = format!("E{axis}{axis}");
+        let offset = Term::single(
+            format!("{iso} offset"),
+            format!("zero offset of the {axis} measurement"),
+            "constant offset between the instrument's zero and the axis' zero",
+            Family::Base,
+            DVec::from_element(n, 1.0),
+            quantity,
+        );
+        let slot = SlotEffect {
+            name: iso.clone(),
+            label: format!("positioning error of the {axis} axis"),
+            meaning: format!(
+                "deviation of {axis} from its commanded position along its own direction"
+            ),
+            quantity,
+            role: SlotRole::Component {
+                axis: axis.clone(),
+                positioning: true,
+                straightness: false,
+            },
+            column: DVec::from_element(n, 1.0),
+            separated_by: None,
+            reference: None,
+        };
+        let mut candidates: Vec<Box<dyn crate::Candidate>> = Vec::new();
+        if let (Some(t), Some(position)) =
+            (obs.variable_of_kind(VariableKind::Time), obs.variable(axis))
+        {
+            let t0 = t.values.iter().copied().fold(f64::INFINITY, f64::min);
+            let col = DMat::from_fn(n, 1, |i, _| position.values[i] * (t.values[i] - t0));
+            candidates.push(Box::new(Term {
+                name: format!("{iso} scale drift"),
+                label: format!("thermal expansion of {axis} growing in time"),
+                meaning: format!("the scale of {axis} changes while the machine warms up (thermal expansion of the screw or scale)"),
+                family: Family::Drift { time_constant_s: None },
+                coefficients: vec![(format!("{iso} scale rate"), Quantity::RatioRate)],
+                columns: col,
+                summary: Summary::EachCoefficient,
+                exposed_by: Some("t".into()),
+                separated_by: None,
+            }));
+        }
+        Effects {
+            errors: vec![slot],
+            instrument: vec![offset],
+            candidates,
+            drift: DriftOf::Instrument,
+            ..Effects::default()
+        }
+    }
+
+    fn title(&self) -> String {
+        self.title.clone()
+    }
+}

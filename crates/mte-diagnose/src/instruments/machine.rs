@@ -1,0 +1,338 @@
+//! How a machine's kinematic errors reach an instrument's observations: the named slot effects
+//! of a machine from the first-order kinematics ([`Machine::jacobian`]), with the ISO 230-1
+//! names of [`mte_errors::catalogue`], and the helpers the machine instruments share.
+
+use mte_errors::catalogue;
+use mte_kinematics::{AxisKind, Component, Machine, SlotKind};
+use mte_linalg::{DMat, DVec, Vec3};
+
+use crate::Result;
+use crate::candidate::{SlotEffect, SlotRole};
+use crate::dataset::{ManifestFile, Table};
+use crate::term::{Family, Quantity};
+
+/// The machine a manifest names (field `machine`: a library name or a file beside it).
+pub(crate) fn load_machine(manifest: &ManifestFile, name: Option<&str>) -> Result<Machine> {
+    let name = name.ok_or_else(|| {
+        manifest.missing("machine", "a library machine name or a machine JSON file")
+    })?;
+    Machine::library_or_file(name, &manifest.dir)
+        .map_err(|e| manifest.error(format!("field `machine`: {e}")))
+}
+
+/// One variable per machine axis (its values per observation).
+pub(crate) fn axis_variables(machine: &Machine, values: &[Vec<f64>]) -> Vec<crate::Variable> {
+    machine
+        .axes()
+        .iter()
+        .zip(values)
+        .map(|(a, v)| crate::Variable {
+            name: a.name.clone(),
+            kind: if a.kind == AxisKind::Rotary {
+                crate::VariableKind::RotaryAxis
+            } else {
+                crate::VariableKind::LinearAxis
+            },
+            values: v.clone(),
+        })
+        .collect()
+}
+
+/// ISO 230-1 letter of component `k` (0–5): X, Y, Z, A, B, C.
+fn letter(k: usize) -> char {
+    catalogue::component_letter(Component::ALL[k])
+}
+
+/// The ISO 230-1 view of one kinematic slot (the catalogue's name, label and meaning) and how
+/// it depends on the machine's state.
+pub(crate) struct SlotName {
+    name: String,
+    label: String,
+    meaning: String,
+    pub(crate) role: SlotRole,
+}
+
+/// Names slot `slot` as [`catalogue::slot_name`] does: a component error `E{c}{axis}` of a
+/// motion slot, a location error `E{c}0{axis}` of a rotary axis' position slot; the slots of
+/// bodies no axis moves are set-up errors.
+fn slot_name(machine: &Machine, slot: usize) -> SlotName {
+    let named = catalogue::slot_name(machine, slot);
+    let s = machine.error_slots()[slot];
+    let c = s.component.index();
+    let role = match (machine.slot_axis(slot), s.kind) {
+        (Some(axis), SlotKind::Motion) => {
+            let own = axis_component(machine, slot);
+            let (positioning, straightness) = match axis.kind {
+                AxisKind::Linear => (c < 3 && own == Some(c), c < 3 && own != Some(c)),
+                AxisKind::Rotary => (c >= 3 && own == Some(c), false),
+            };
+            SlotRole::Component {
+                axis: axis.name.clone(),
+                positioning,
+                straightness,
+            }
+        }
+        (Some(_), SlotKind::Position) => SlotRole::Constant {
+            family: Family::Location,
+        },
+        (None, _) => SlotRole::Constant {
+            family: Family::Setup,
+        },
+    };
+    SlotName {
+        name: named.name,
+        label: named.label,
+        meaning: named.meaning,
+        role,
+    }
+}
+
+/// The slot component (0–5) that lies along the axis' own direction, if the axis is parallel
+/// to a machine axis.
+fn axis_component(machine: &Machine, slot: usize) -> Option<usize> {
+    let axis = machine.slot_axis(slot)?;
+    let d = axis.direction;
+    let k = (0..3).find(|&k| (d[k].abs() - 1.0).abs() < 1e-9)?;
+    Some(match axis.kind {
+        AxisKind::Linear => k,
+        AxisKind::Rotary => k + 3,
+    })
+}
+
+/// Squareness of a linear axis: the linear part of its straightness. The axis `a` tilted by θ
+/// about the third direction `r` moves by `θ (r × a)` per unit travel, so the straightness in
+/// direction `d` grows as `θ ((r × a)·d) · s` with the axis coordinate `s`.
+fn squareness_effect(
+    name: &SlotName,
+    column: &DVec,
+    coordinate: &[f64],
+    slot_dir: usize,
+    axis_dir: usize,
+) -> Option<SlotEffect> {
+    let SlotRole::Component {
+        axis,
+        straightness: true,
+        ..
+    } = &name.role
+    else {
+        return None;
+    };
+    let r = 3 - slot_dir - axis_dir;
+    let (mut rv, mut av, mut dv) = (Vec3::zeros(), Vec3::zeros(), Vec3::zeros());
+    rv[r] = 1.0;
+    av[axis_dir] = 1.0;
+    dv[slot_dir] = 1.0;
+    let sign = rv.cross(&av).dot(&dv);
+    let plane: String = [letter(axis_dir), letter(slot_dir)].iter().collect();
+    let iso = catalogue::location_error_name(Component::ALL[r + 3], axis);
+    Some(SlotEffect {
+        name: iso.clone(),
+        label: format!("squareness of {axis} in the {plane} plane ({iso})"),
+        meaning: format!(
+            "the {axis} axis is not square to the machine frame in the {plane} plane: it moves along a slightly tilted line"
+        ),
+        quantity: Quantity::Angle,
+        role: SlotRole::Constant {
+            family: Family::Squareness,
+        },
+        column: DVec::from_fn(column.len(), |i, _| sign * column[i] * coordinate[i]),
+        separated_by: None,
+        reference: None,
+    })
+}
+
+/// Builds the named slot effects of a machine from the per-observation sensitivities `s`
+/// (n × n_slots), the axis values per observation, and hints on what separates them. With a
+/// `reference` (sensitivities to the slots' values at each observation's reference pose, and
+/// the axis values there), an error acts at both poses.
+///
+/// Position slots of linear axes are left out: their translations are constant offsets (setup
+/// errors say the same) and their rotations turn the whole branch downstream, which the
+/// squareness and angular component errors describe in the terms engineers use.
+pub(crate) fn slot_effects(
+    machine: &Machine,
+    s: &DMat,
+    axes: &[Vec<f64>],
+    reference: Option<(&DMat, &[Vec<f64>])>,
+    hint: &dyn Fn(&SlotName) -> Option<String>,
+) -> Vec<SlotEffect> {
+    let reference_matrix = reference;
+    let mut out = Vec::new();
+    for j in 0..machine.n_slots() {
+        let slot = machine.error_slots()[j];
+        let c = slot.component.index();
+        let axis = machine.slot_axis(j);
+        let column = match (axis.map(|a| a.kind), slot.kind) {
+            (Some(AxisKind::Linear), SlotKind::Position) => continue,
+            _ => s.column(j).into_owned(),
+        };
+        let axis_k = axis.and_then(|a| machine.axis_index(&a.name));
+        let reference = reference.map(|(r, ref_axes)| {
+            let coordinate = axis_k
+                .map(|k| ref_axes[k].clone())
+                .unwrap_or_else(|| vec![0.0; column.len()]);
+            (r.column(j).into_owned(), coordinate)
+        });
+        if column.amax() < 1e-12 && reference.as_ref().is_none_or(|(r, _)| r.amax() < 1e-12) {
+            continue;
+        }
+        let name = slot_name(machine, j);
+        if let (Some(axis), SlotKind::Motion) = (axis, slot.kind) {
+            if axis.kind == AxisKind::Linear && c < 3 {
+                if let (Some(k), Some(own)) =
+                    (machine.axis_index(&axis.name), axis_component(machine, j))
+                {
+                    if let Some(mut sq) = squareness_effect(&name, &column, &axes[k], c, own) {
+                        // A squareness is a constant: its effect at the reference pose adds in.
+                        if let Some((r, coordinate)) = &reference {
+                            if let Some(at_ref) = squareness_effect(&name, r, coordinate, c, own) {
+                                sq.column += at_ref.column;
+                            }
+                        }
+                        sq.separated_by = hint(&name);
+                        out.push(sq);
+                    }
+                }
+            }
+        }
+        if let (Some(axis), SlotKind::Position) = (axis, slot.kind) {
+            if let Some(child) =
+                rotary_child(machine, slot.body).filter(|_| axis.kind == AxisKind::Rotary)
+            {
+                let col = absolute_location_column(machine, s, slot.body, child, c);
+                let reference = reference.as_ref().and_then(|(_, coordinate)| {
+                    let (r, _) = reference_matrix?;
+                    absolute_location_column(machine, r, slot.body, child, c)
+                        .map(|r| (r, coordinate.clone()))
+                });
+                if let Some(col) = col.filter(|c| c.amax() > 1e-12) {
+                    let carried = &machine.bodies()[child].name;
+                    out.push(SlotEffect {
+                        name: format!("{} abs", name.name),
+                        label: format!(
+                            "{} with the {carried} axis kept in place (absolute)",
+                            name.label
+                        ),
+                        meaning: format!(
+                            "{}; the {carried} axis it carries keeps its own place and direction",
+                            name.meaning
+                        ),
+                        quantity: if c < 3 {
+                            Quantity::Length
+                        } else {
+                            Quantity::Angle
+                        },
+                        role: name.role.clone(),
+                        column: col,
+                        separated_by: hint(&name),
+                        reference,
+                    });
+                }
+            }
+        }
+        out.push(SlotEffect {
+            separated_by: hint(&name),
+            name: name.name,
+            label: name.label,
+            meaning: name.meaning,
+            quantity: if c < 3 {
+                Quantity::Length
+            } else {
+                Quantity::Angle
+            },
+            role: name.role,
+            column,
+            reference,
+        });
+    }
+    out
+}
+
+/// The body after `body` on its kinematic branch, when it is moved by a rotary axis.
+fn rotary_child(machine: &Machine, body: usize) -> Option<usize> {
+    let child = [machine.tool_chain(), machine.workpiece_chain()]
+        .into_iter()
+        .find_map(|chain| {
+            chain
+                .iter()
+                .position(|&b| b == body)
+                .and_then(|k| chain.get(k + 1).copied())
+        })?;
+    let k = machine.axes().iter().position(|a| a.body == child)?;
+    (machine.axes()[k].kind == AxisKind::Rotary).then_some(child)
+}
+
+/// A location error of a rotary axis that carries another rotary axis exists in two
+/// representations (ISO 230-7): *relative*, the carried axis moves with it (the slot itself),
+/// and *absolute*, the carried axis keeps its place and direction at home. The absolute one is
+/// the axis' slot with twist e plus the carried body's slot with `−(v − t × ω, ω)` (t the
+/// carried body's offset; home frames are parallel, so the adjoint reduces to this).
+fn absolute_location_column(
+    machine: &Machine,
+    s: &DMat,
+    body: usize,
+    child: usize,
+    component: usize,
+) -> Option<DVec> {
+    let slot = |b: usize, k: usize| {
+        machine
+            .error_slots()
+            .iter()
+            .position(|e| e.body == b && e.kind == SlotKind::Position && e.component.index() == k)
+    };
+    let t = machine.body_home_mm(child) - machine.body_home_mm(body);
+    let (mut v, mut w) = (Vec3::zeros(), Vec3::zeros());
+    if component < 3 {
+        v[component] = 1.0
+    } else {
+        w[component - 3] = 1.0
+    }
+    let v_child = -(v - t.cross(&w));
+    let mut col = s.column(slot(body, component)?).into_owned();
+    for k in 0..6 {
+        let coef = if k < 3 { v_child[k] } else { -w[k - 3] };
+        if coef != 0.0 {
+            col += s.column(slot(child, k)?) * coef;
+        }
+    }
+    Some(col)
+}
+
+/// Reads the commanded axes of a machine from `<axis>_mm` / `<axis>_deg` columns (rad inside).
+pub(crate) fn read_axes(machine: &Machine, table: &Table) -> Result<Vec<Vec<f64>>> {
+    machine
+        .axes()
+        .iter()
+        .map(|axis| {
+            let lower = axis.name.to_lowercase();
+            match axis.kind {
+                AxisKind::Linear => Ok(table.numbers(table.require(&format!("{lower}_mm"))?)?),
+                AxisKind::Rotary => Ok(table
+                    .numbers(table.require(&format!("{lower}_deg"))?)?
+                    .into_iter()
+                    .map(f64::to_radians)
+                    .collect()),
+            }
+        })
+        .collect()
+}
+
+/// The location errors of every rotary axis (ISO 230-7) across its line: the position of the
+/// line in the two directions across the axis and its orientation about them (EX0B, EZ0B, EA0B,
+/// EC0B for a B axis along Y). Errors along and about the axis' own direction are a shift along
+/// the line and the angular zero, which these instruments see as setup errors.
+pub(crate) fn location_names(machine: &Machine) -> Vec<String> {
+    let mut names = Vec::new();
+    for axis in machine.axes().iter().filter(|a| a.kind == AxisKind::Rotary) {
+        let own = (0..3).find(|&k| (axis.direction[k].abs() - 1.0).abs() < 1e-9);
+        for k in 0..6 {
+            if Some(k % 3) != own {
+                names.push(catalogue::location_error_name(
+                    Component::ALL[k],
+                    &axis.name,
+                ));
+            }
+        }
+    }
+    names
+}
