@@ -11,17 +11,36 @@ use xtask::reproduce::{self, Freshness, PAPERS};
 
 const USAGE: &str = "usage: cargo xtask <reproduce [seed000|seed002|seed003|seed004|all] [--check] | reproduce seed003 --timing | bench [-- criterion args] | study [fdr|power|coverage|openworld|all] [--n N] [--n-power M] [--seed S] [--kind axis|tracker|rtest] [--base-model omit] [--out FILE]>";
 
-/// `cargo xtask realistic <axis|tracker|rtest> <seed> <dir>`: writes one clean realistic dataset
-/// (every ordinary error, no hidden effect) for trying `mte diagnose` or timing it.
+/// `cargo xtask realistic <axis|tracker|rtest|points> <seed> <dir>`: writes one clean realistic
+/// dataset (every ordinary error, no hidden effect) for trying `mte diagnose` or timing it;
+/// `points` writes 3-D points of a C table with a calibrated target (the bundled
+/// `fixtures/datasets/c-stage-points/` is seed 1).
 fn run_realistic(args: &[String]) -> Result<(), String> {
     let [kind, seed, dir] = args else {
-        return Err("usage: cargo xtask realistic <axis|tracker|rtest> <seed> <dir>".into());
+        return Err("usage: cargo xtask realistic <axis|tracker|rtest|points> <seed> <dir>".into());
     };
+    if kind == "points" {
+        let seed: u64 = seed.parse().map_err(|e| format!("seed `{seed}`: {e}"))?;
+        let truth =
+            xtask::realistic::points::write_points(seed, std::path::Path::new(dir), true, None)
+                .map_err(|e| format!("{dir}: {e}"))?;
+        println!(
+            "wrote {} ({} rows, noise {:.2} µm)",
+            truth.manifest.display(),
+            truth.rows,
+            truth.noise_um
+        );
+        return Ok(());
+    }
     let kind = match kind.as_str() {
         "axis" => xtask::realistic::Kind::Axis,
         "tracker" => xtask::realistic::Kind::Tracker,
         "rtest" => xtask::realistic::Kind::Rtest,
-        other => return Err(format!("kind `{other}`: expected axis, tracker or rtest")),
+        other => {
+            return Err(format!(
+                "kind `{other}`: expected axis, tracker, rtest or points"
+            ));
+        }
     };
     let seed: u64 = seed.parse().map_err(|e| format!("seed `{seed}`: {e}"))?;
     let dir = std::path::Path::new(dir);

@@ -5,6 +5,7 @@
 
 mod axis;
 mod machine;
+mod points;
 mod rtest;
 mod tracker;
 
@@ -15,6 +16,7 @@ use crate::dataset::ManifestFile;
 use crate::model::{ObservationModel, Prepared, prepare};
 
 pub use axis::AxisRuns;
+pub use points::Points;
 pub use rtest::RTest;
 pub use tracker::Tracker;
 
@@ -51,6 +53,11 @@ const INSTRUMENTS: &[Instrument] = &[
         read: |f, noise| boxed(Tracker::read(f, noise)),
     },
     Instrument {
+        format: "mte-dataset/1",
+        kind: Some("points"),
+        read: |f, noise| boxed(Points::read(f, noise)),
+    },
+    Instrument {
         format: "mte-rtest/1",
         kind: None,
         read: |f, noise| boxed(RTest::read(f, noise)),
@@ -58,7 +65,7 @@ const INSTRUMENTS: &[Instrument] = &[
 ];
 
 /// Reads a manifest and its tables and prepares the diagnosis: an `mte-dataset/1` manifest
-/// (`kind` axis or tracker) or an `mte-rtest/1` manifest (R-test data). `noise_um` is the
+/// (`kind` axis, tracker or points) or an `mte-rtest/1` manifest (R-test data). `noise_um` is the
 /// stated standard uncertainty of one observation where the manifest states none (the R-test
 /// format has no such field).
 ///

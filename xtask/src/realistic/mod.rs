@@ -20,6 +20,7 @@
 
 pub mod axis;
 pub mod geom;
+pub mod points;
 pub mod rtest;
 pub mod smooth;
 pub mod tracker;

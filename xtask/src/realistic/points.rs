@@ -1,0 +1,160 @@
+//! 3-D points of a rotary stage with linear stages (circle-point analysis): a C rotary table on
+//! the bed carries the instrument (a tracker or camera bar set on the table, in an unknown
+//! pose); X, Y, Z carry a target on the spindle side. The C axis line is off its nominal place
+//! and tilted (its four location errors EX0C, EY0C, EA0C, EB0C), X has a scale error (its
+//! positioning error growing linearly with X), and every coordinate carries white noise.
+//! Transforms are written out here ([`super::geom`]), sharing no code with `mte-kinematics`.
+
+use std::path::{Path, PathBuf};
+
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use rand_distr::{Distribution, Normal};
+
+use super::geom::{Iso, V3, rot, rot_z, trans};
+use super::smooth::signed;
+
+/// What the points generator put in (kept in memory, never written).
+#[derive(Debug, Clone)]
+pub struct PointsTruth {
+    /// The manifest to load.
+    pub manifest: PathBuf,
+    /// EX0C, EY0C (mm), EA0C, EB0C (rad): the C axis line's place and direction.
+    pub location: [(String, f64); 4],
+    /// The scale error of X (ratio).
+    pub x_scale: f64,
+    /// The target's offset from the tool tip, mm.
+    pub target_mm: V3,
+    /// Noise, µm.
+    pub noise_um: f64,
+    /// Rows written.
+    pub rows: usize,
+}
+
+/// Tool length (tool tip below the Z carriage's reference), mm.
+const TOOL_MM: f64 = 120.0;
+
+/// Writes `machine.json`, `points.csv` and `manifest.json` into `dir`. With `state_offset`,
+/// the manifest states the target's offset (a calibrated holder); otherwise it is left to the
+/// fit. `base_model` goes into the manifest as it is.
+///
+/// # Errors
+/// Writing the files.
+pub fn write_points(
+    seed: u64,
+    dir: &Path,
+    state_offset: bool,
+    base_model: Option<serde_json::Value>,
+) -> std::io::Result<PointsTruth> {
+    std::fs::create_dir_all(dir)?;
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let location = [
+        ("EX0C".to_string(), signed(&mut rng, 10.0, 40.0) * 1e-3),
+        ("EY0C".to_string(), signed(&mut rng, 10.0, 40.0) * 1e-3),
+        ("EA0C".to_string(), signed(&mut rng, 20.0, 80.0) * 1e-6),
+        ("EB0C".to_string(), signed(&mut rng, 20.0, 80.0) * 1e-6),
+    ];
+    let x_scale = signed(&mut rng, 10.0, 40.0) * 1e-6;
+    let noise_um = rng.random_range(0.5..2.0);
+    let target_mm = V3::new(
+        rng.random_range(-30.0..30.0),
+        rng.random_range(-30.0..30.0),
+        rng.random_range(-60.0..-20.0),
+    );
+    // The C table: its line displaced by (dx, dy) and tilted by (a, b) about X and Y of the bed,
+    // then the table turned by −C (ISO 841 sign of a table axis).
+    let [(_, dx), (_, dy), (_, a), (_, b)] = &location;
+    let table = |c_deg: f64| -> Iso {
+        trans(V3::new(*dx, *dy, 0.0)) * rot(V3::new(*a, *b, 0.0)) * rot_z(-c_deg.to_radians())
+    };
+    // Target in the bed frame: X with its scale error, Y and Z exact, then the target offset.
+    let target = |x: f64, y: f64, z: f64| V3::new(x * (1.0 + x_scale), y, z) + target_mm;
+    let noise = Normal::new(0.0, noise_um * 1e-3).unwrap_or_else(|_| unreachable!());
+    let mut csv = String::from("setup,x_mm,y_mm,z_mm,c_deg,point_x_mm,point_y_mm,point_z_mm\n");
+    let mut rows = 0;
+    for setup in ["S1", "S2"] {
+        // The instrument on the table, in a pose nobody measured.
+        let pose = trans(V3::new(
+            rng.random_range(-300.0..300.0),
+            rng.random_range(-300.0..300.0),
+            rng.random_range(-100.0..100.0),
+        )) * rot(V3::new(
+            rng.random_range(-1.0..1.0),
+            rng.random_range(-1.0..1.0),
+            rng.random_range(-3.0..3.0),
+        ));
+        for k in 0..12 {
+            let c = 30.0 * k as f64 + rng.random_range(-5.0..5.0);
+            for x in [-150.0, 0.0, 150.0] {
+                for y in [-120.0, 120.0] {
+                    for z in [-150.0, 0.0] {
+                        let p = target(x, y, z);
+                        let in_table = table(c).inverse_transform_point(&p.into());
+                        let m = pose.inverse_transform_point(&in_table);
+                        let v = m.coords + V3::from_fn(|_, _| noise.sample(&mut rng));
+                        csv.push_str(&format!(
+                            "{setup},{x:.3},{y:.3},{z:.3},{c:.4},{:.5},{:.5},{:.5}\n",
+                            v.x, v.y, v.z
+                        ));
+                        rows += 1;
+                    }
+                }
+            }
+        }
+    }
+    std::fs::write(dir.join("points.csv"), csv)?;
+    std::fs::write(
+        dir.join("machine.json"),
+        serde_json::to_string_pretty(&machine_json())?,
+    )?;
+    let mut manifest = serde_json::json!({
+        "format": "mte-dataset/1",
+        "kind": "points",
+        "description": "3-D points of a target on the spindle side, measured from the C table (simulated)",
+        "machine": "machine.json",
+        "data": "points.csv",
+        "noise_um": noise_um,
+        "target": "tool",
+    });
+    if state_offset {
+        manifest["target_mm"] = serde_json::json!([target_mm.x, target_mm.y, target_mm.z]);
+    }
+    if let Some(b) = base_model {
+        manifest["base_model"] = b;
+    }
+    let path = dir.join("manifest.json");
+    std::fs::write(&path, serde_json::to_string_pretty(&manifest)?)?;
+    Ok(PointsTruth {
+        manifest: path,
+        location,
+        x_scale,
+        target_mm,
+        noise_um,
+        rows,
+    })
+}
+
+/// The `mte-machine/1` description: C table on the bed; Y, X, Z on the tool side.
+fn machine_json() -> serde_json::Value {
+    serde_json::json!({
+        "format": "mte-machine/1",
+        "name": "c-stage-xyz",
+        "description": "A C rotary table on the bed with X, Y, Z linear stages carrying the spindle (bed-Y-X-Z-tool); table axis with sign -1.",
+        "tool": "tool",
+        "workpiece": "workpiece",
+        "axis_order": ["X", "Y", "Z", "C"],
+        "bodies": [
+            {"name": "bed"},
+            {"name": "Y", "parent": "bed", "offset_mm": [0, 0, 0],
+             "joint": {"type": "linear", "axis": "Y", "direction": [0, 1, 0], "sign": 1, "stroke_mm": [-300, 300]}},
+            {"name": "X", "parent": "Y", "offset_mm": [0, 0, 0],
+             "joint": {"type": "linear", "axis": "X", "direction": [1, 0, 0], "sign": 1, "stroke_mm": [-300, 300]}},
+            {"name": "Z", "parent": "X", "offset_mm": [0.0, 0.0, TOOL_MM],
+             "joint": {"type": "linear", "axis": "Z", "direction": [0, 0, 1], "sign": 1, "stroke_mm": [-300, 100]}},
+            {"name": "tool", "parent": "Z", "offset_mm": [0.0, 0.0, -TOOL_MM]},
+            {"name": "C", "parent": "bed", "offset_mm": [0, 0, 0],
+             "joint": {"type": "rotary", "axis": "C", "direction": [0, 0, 1], "sign": -1, "stroke_deg": [0, 360]}},
+            {"name": "workpiece", "parent": "C", "offset_mm": [0, 0, 0]}
+        ]
+    })
+}
