@@ -210,7 +210,7 @@ fn run_study(args: &[String]) -> Result<(), String> {
             .filter(|c| kinds.contains(&c.0))
         {
             let base = match base_model {
-                BaseModel::Default => studies::user_model_lacking(effect),
+                BaseModel::Default => studies::user_model_lacking(kind, effect),
                 ref other => other.clone(),
             };
             report.power.extend(studies::power_with(
@@ -230,7 +230,7 @@ fn run_study(args: &[String]) -> Result<(), String> {
                 &[size],
                 n,
                 seed,
-                &studies::user_model_lacking(effect),
+                &studies::user_model_lacking(kind, effect),
             ));
         }
     }

@@ -382,6 +382,12 @@ pub fn diagnose(
         pruned.extend(searcher.remove(&mut chosen, k));
     };
     let finals = searcher.removal_p_values(&chosen, &w, &sol);
+    let rotary = |t: &Term| {
+        t.exposed_by
+            .as_deref()
+            .and_then(|v| obs.variable(v))
+            .is_some_and(|v| v.kind == crate::VariableKind::RotaryAxis)
+    };
     let findings: Vec<Finding> = chosen
         .iter()
         .enumerate()
@@ -391,20 +397,22 @@ pub fn diagnose(
             meaning: c.term.meaning.clone(),
             family: c.term.family.clone(),
             estimates: extended_parameters[base.len() + k].estimates.clone(),
-            hyper_parameter: hyper_of(&c.term.family).zip(hyper_u[k]).map(|((v, q), u)| {
-                let u = u * scale.sqrt();
-                Estimate {
-                    name: if q == Quantity::Duration {
-                        "time constant".into()
-                    } else {
-                        "period".into()
-                    },
-                    value: v,
-                    uncertainty: u,
-                    quantity: q,
-                    text: q.format(v, u),
-                }
-            }),
+            hyper_parameter: hyper_of(&c.term.family, rotary(&c.term))
+                .zip(hyper_u[k])
+                .map(|((v, q), u)| {
+                    let u = u * scale.sqrt();
+                    Estimate {
+                        name: if q == Quantity::Duration {
+                            "time constant".into()
+                        } else {
+                            "period".into()
+                        },
+                        value: v,
+                        uncertainty: u,
+                        quantity: q,
+                        text: q.format(v, u),
+                    }
+                }),
             p_value: c.p_value,
             p_value_final: finals[k],
             cv_rms_before: c.cv_before,
@@ -1094,8 +1102,9 @@ fn f_test(rss: f64, delta_rss: f64, k: usize, dof: usize) -> f64 {
 }
 
 /// The period or time constant of a term, with the quantity it is reported in.
-fn hyper_of(family: &Family) -> Option<(f64, Quantity)> {
+fn hyper_of(family: &Family, rotary: bool) -> Option<(f64, Quantity)> {
     match family {
+        Family::Periodic { period } if rotary => Some((*period, Quantity::AxisAngle)),
         Family::Periodic { period } => Some((*period, Quantity::Distance)),
         Family::Drift {
             time_constant_s: Some(tau),
@@ -1123,7 +1132,7 @@ fn covariance_with_hyper(
     let mut col = offset;
     for (k, c) in chosen.iter().enumerate() {
         let width = c.term.width();
-        if let Some((h, _)) = hyper_of(&c.term.family) {
+        if let Some((h, _)) = hyper_of(&c.term.family, false) {
             let step = 1e-4 * h.abs().max(1e-12);
             let cand = searcher.candidate(c.entry);
             if let (Some(plus), Some(minus)) =

@@ -227,7 +227,11 @@ pub fn markdown(d: &Diagnosis, title: &str) -> String {
         "| against | channel | test | share of residual | p (Bonferroni) |\n|---|---|---|---|---|"
     );
     for t in tests.iter().take(8) {
-        let period = t.period.map(|p| format!(" ({p:.3})")).unwrap_or_default();
+        let period = t
+            .period_text
+            .as_ref()
+            .map(|p| format!(" ({p})"))
+            .unwrap_or_default();
         let _ = writeln!(
             s,
             "| {} | {} | {}{period} | {:.0} % | {} |",
@@ -314,8 +318,9 @@ fn unexplained(d: &Diagnosis) -> String {
     tests.sort_by(|a, b| a.p_value.total_cmp(&b.p_value));
     for t in tests.iter().take(4) {
         let period = t
-            .period
-            .map(|p| format!(", period {p:.3}"))
+            .period_text
+            .as_ref()
+            .map(|p| format!(", period {p}"))
             .unwrap_or_default();
         parts.push(format!(
             "the {} residuals still depend on {} ({}{period}; {:.0} % of the residual, {})",

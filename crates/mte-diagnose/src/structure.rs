@@ -25,6 +25,8 @@ pub struct StructureTest {
     pub share_of_residual: f64,
     /// For a periodic dependence, the best period (mm or rad).
     pub period: Option<f64>,
+    /// The period as people read it (`20.1 mm`, `120.0°`).
+    pub period_text: Option<String>,
 }
 
 impl StructureTest {
@@ -51,7 +53,7 @@ pub(crate) fn structure_tests(
                    channel: usize,
                    test: &str,
                    cols: DMat,
-                   period: Option<f64>,
+                   period: Option<(f64, &str)>,
                    inner: f64| {
         let mask = DVec::from_fn(n, |i, _| if obs.channel[i] == channel { 1.0 } else { 0.0 });
         let mut c = cols;
@@ -74,7 +76,11 @@ pub(crate) fn structure_tests(
                 f_statistic: f,
                 p_value: p,
                 share_of_residual: inc.delta_rss / rss_w.max(1e-300),
-                period,
+                period: period.map(|p| p.0),
+                period_text: period.map(|(p, unit)| match unit {
+                    "°" => format!("{:.1}°", p.to_degrees()),
+                    unit => format!("{p:.2} {unit}"),
+                }),
             },
             inner,
         ));
@@ -116,7 +122,14 @@ pub(crate) fn structure_tests(
                                 ch,
                                 "periodic",
                                 sin_cos_columns(&v.values, p),
-                                Some(p),
+                                Some((
+                                    p,
+                                    if v.kind == VariableKind::RotaryAxis {
+                                        "°"
+                                    } else {
+                                        "mm"
+                                    },
+                                )),
                                 periods.len() as f64,
                             );
                         }

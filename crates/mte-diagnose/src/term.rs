@@ -61,6 +61,8 @@ pub enum Quantity {
     Distance,
     /// A duration in s, reported in s (a time constant).
     Duration,
+    /// A turn of a rotary axis in rad, reported in degrees (a period along a rotary axis).
+    AxisAngle,
 }
 
 impl Quantity {
@@ -75,6 +77,7 @@ impl Quantity {
             Quantity::RatioRate => (1e6 * 60.0, "ppm/min"),
             Quantity::Distance => (1.0, "mm"),
             Quantity::Duration => (1.0, "s"),
+            Quantity::AxisAngle => (180.0 / std::f64::consts::PI, "°"),
         }
     }
 

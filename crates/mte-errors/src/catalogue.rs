@@ -136,6 +136,28 @@ pub fn location_error_name(c: Component, axis: &str) -> String {
     format!("E{}0{axis}", component_letter(c))
 }
 
+/// ISO 230-1 name of a component error of `axis` (error motion of component `c` as the axis
+/// moves): `E<c><axis>`, e.g. `EXX` (positioning of X), `EYX` (straightness), `ECC`.
+///
+/// ```
+/// use mte_errors::catalogue::component_error_name;
+/// use mte_kinematics::Component;
+/// assert_eq!(component_error_name(Component::Dx, "X"), "EXX");
+/// ```
+pub fn component_error_name(c: Component, axis: &str) -> String {
+    format!("E{}{axis}", component_letter(c))
+}
+
+/// ISO 230-1 name of the positioning error of an axis named by its direction letter (`X`, `Y`,
+/// `Z` linear, `A`, `B`, `C` rotary): `EXX`, `ECC`; for another name, `E<axis><axis>`.
+pub fn positioning_error_name(axis: &str) -> String {
+    let mut chars = axis.chars();
+    match (chars.next().and_then(component_of_letter), chars.next()) {
+        (Some(c), None) => component_error_name(c, axis),
+        _ => format!("E{axis}{axis}"),
+    }
+}
+
 /// Splits an ISO 230-1 location error name `E<c>0<axis>` into its component and axis name;
 /// `None` when `name` does not have that form.
 ///
@@ -301,7 +323,7 @@ pub fn slot_name(machine: &Machine, slot: usize) -> SlotName {
                 }
             );
             SlotName {
-                name: format!("E{letter}{an}"),
+                name: component_error_name(s.component, an),
                 label,
                 meaning,
                 kind: ParamKind::Component,

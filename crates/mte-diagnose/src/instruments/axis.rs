@@ -202,7 +202,7 @@ impl ObservationModel for AxisRuns {
     fn effects(&self) -> Effects {
         let obs = &self.observations;
         let (n, quantity, axis) = (obs.len(), obs.quantity, &self.axis);
-        let iso = format!("E{axis}{axis}");
+        let iso = mte_errors::catalogue::positioning_error_name(axis);
         let offset = Term::single(
             format!("{iso} offset"),
             format!("zero offset of the {axis} measurement"),
