@@ -50,6 +50,13 @@ pub trait Candidate: Send + Sync {
         None
     }
 
+    /// How many design columns all variants together have on these observations (the memory
+    /// the diagnosis reserves for them is this × observations × 8 bytes). The default builds
+    /// the variants; override it where that is costly.
+    fn columns(&self, obs: &Observations) -> usize {
+        self.variants(obs).iter().map(|t| t.columns.ncols()).sum()
+    }
+
     /// `true` for a higher order of a component error the base already has ([`Completion`]):
     /// such terms complete the base before the search and are not causes.
     fn completes_base(&self) -> bool {
@@ -80,6 +87,10 @@ impl Candidate for Requires {
 
     fn requires(&self) -> Option<&str> {
         Some(&self.term)
+    }
+
+    fn columns(&self, obs: &Observations) -> usize {
+        self.inner.columns(obs)
     }
 }
 
@@ -716,6 +727,12 @@ impl Candidate for Scan {
 
     fn at(&self, _variant: usize, value: f64) -> Option<Term> {
         Some((self.make)(value))
+    }
+
+    fn columns(&self, _obs: &Observations) -> usize {
+        self.grid
+            .first()
+            .map_or(0, |&p| self.grid.len() * (self.make)(p).columns.ncols())
     }
 }
 

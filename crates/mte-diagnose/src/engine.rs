@@ -40,6 +40,9 @@ pub struct DiagnoseParams {
     /// Outer folds of the honest held-out figures: the whole search (choice of terms, periods,
     /// time constants) is repeated without each fold and predicts it. Default 5; 0 skips them.
     pub outer_folds: usize,
+    /// Memory the candidates' designs may take, GB; a larger problem is refused before anything
+    /// is allocated ([`DiagnoseError::TooLarge`]). Default 4.
+    pub max_memory_gb: f64,
 }
 
 impl Default for DiagnoseParams {
@@ -52,6 +55,7 @@ impl Default for DiagnoseParams {
             max_effects: 10,
             shortlist: 8,
             outer_folds: 5,
+            max_memory_gb: 4.0,
         }
     }
 }
@@ -312,6 +316,17 @@ pub fn diagnose(
             needed,
         });
     }
+    // Every variant's design is kept: refuse before allocating what the machine cannot hold.
+    let columns: usize = candidates.iter().map(|c| c.columns(obs)).sum();
+    let needed_gb = (n as f64) * (columns + 4 * base_width) as f64 * 8.0 / 1e9;
+    if needed_gb > params.max_memory_gb {
+        return Err(DiagnoseError::TooLarge {
+            observations: n,
+            columns,
+            needed_gb,
+            limit_gb: params.max_memory_gb,
+        });
+    }
     let pool = Pool::new(obs, candidates, &base);
     let searcher = Searcher {
         obs,
@@ -512,6 +527,12 @@ fn check_params(p: &DiagnoseParams) -> Result<()> {
     }
     if !(p.min_gain.is_finite() && (0.0..1.0).contains(&p.min_gain)) {
         return bad("min_gain", format!("{}: expected [0, 1)", p.min_gain));
+    }
+    if !(p.max_memory_gb.is_finite() && p.max_memory_gb > 0.0) {
+        return bad(
+            "max_memory_gb",
+            format!("{}: expected a positive number of GB", p.max_memory_gb),
+        );
     }
     Ok(())
 }

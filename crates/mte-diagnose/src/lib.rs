@@ -43,13 +43,27 @@ pub enum DiagnoseError {
     },
     /// Too few observations for the base model and cross-validation.
     #[error(
-        "{observations} observations are too few: the base model and {needed} cross-validation need at least {needed}"
+        "{observations} observations are too few: the base model and the cross-validation need at least {needed}"
     )]
     TooFewObservations {
         /// How many there are.
         observations: usize,
         /// How many are needed.
         needed: usize,
+    },
+    /// The candidates' designs would take more memory than allowed.
+    #[error(
+        "{observations} observations × {columns} candidate columns need {needed_gb:.1} GB of memory, more than the limit of {limit_gb:.1} GB (DiagnoseParams::max_memory_gb; `mte diagnose --max-memory-gb`): thin the data (e.g. every k-th reading of a continuous log) or raise the limit"
+    )]
+    TooLarge {
+        /// Observations.
+        observations: usize,
+        /// Columns of every candidate variant together.
+        columns: usize,
+        /// Memory the designs need, GB.
+        needed_gb: f64,
+        /// The limit, GB.
+        limit_gb: f64,
     },
     /// A dataset file could not be read or parsed.
     #[error("{path}: {detail}")]

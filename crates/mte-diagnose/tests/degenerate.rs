@@ -104,3 +104,44 @@ fn significance_level_outside_zero_to_one_half_is_an_error() {
         );
     }
 }
+
+/// A continuous log too large for the memory limit is refused before the candidates' designs
+/// are built, with the figure; under the limit the same data load and the estimate is stated.
+#[test]
+fn a_log_beyond_the_memory_limit_is_refused_with_the_figure() {
+    let dir = std::env::temp_dir().join(format!("mte-diagnose-large-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let rows = 50_000;
+    let mut csv = String::from("run,direction,x_mm,deviation_um\n");
+    for i in 0..rows {
+        let x = 700.0 * (i % 10_000) as f64 / 10_000.0 + 0.013 * (i / 10_000) as f64;
+        let dir = if (i / 10_000) % 2 == 0 { "+" } else { "-" };
+        csv.push_str(&format!("{},{dir},{x:.4},{:.3}\n", i / 10_000, 0.001 * x));
+    }
+    std::fs::write(dir.join("runs.csv"), csv).unwrap();
+    std::fs::write(
+        dir.join("manifest.json"),
+        r#"{"format": "mte-dataset/1", "kind": "axis", "axis": "X", "data": "runs.csv", "noise_um": 0.5}"#,
+    )
+    .unwrap();
+    let p = mte_diagnose::load(&dir.join("manifest.json")).unwrap();
+    let params = DiagnoseParams {
+        max_memory_gb: 0.05,
+        ..DiagnoseParams::default()
+    };
+    let err = diagnose(&p.observations, p.base, &p.candidates, &params).unwrap_err();
+    let DiagnoseError::TooLarge {
+        observations,
+        columns,
+        needed_gb,
+        ..
+    } = &err
+    else {
+        panic!("expected TooLarge, got {err}");
+    };
+    assert_eq!(*observations, rows);
+    // The periodic scan alone has hundreds of sine/cosine pairs.
+    assert!(*columns > 200, "{columns}");
+    assert!((*needed_gb - rows as f64 * *columns as f64 * 8.0 / 1e9).abs() < 0.1 * needed_gb);
+    assert!(err.to_string().contains("GB"), "{err}");
+}
