@@ -1,7 +1,7 @@
 //! The instruments the diagnosis reads from disk, each an [`ObservationModel`] in its own
 //! module, and the one table that picks an instrument from a manifest's `format` and `kind`.
 //! To add an instrument: implement [`ObservationModel`] for its data, give it a reader, and add
-//! one row to [`INSTRUMENTS`].
+//! one row to the `INSTRUMENTS` table in this module.
 
 mod axis;
 mod machine;
