@@ -809,7 +809,7 @@ fn column_matrix(c: &DVec) -> DMat {
     DMat::from_column_slice(c.len(), 1, c.as_slice())
 }
 
-fn varies(v: &[f64]) -> bool {
+pub(crate) fn varies(v: &[f64]) -> bool {
     let (lo, hi) = crate::basis::range(v);
     hi > lo
 }

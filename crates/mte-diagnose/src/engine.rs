@@ -458,6 +458,21 @@ pub fn diagnose(
         )
     });
     let mut notes = Vec::new();
+    for v in &obs.variables {
+        if !crate::candidate::varies(&v.values) {
+            notes.push(match v.kind {
+                crate::data::VariableKind::Time => "the data have a single time value: time-dependent effects (thermal drift) cannot be tested".to_string(),
+                crate::data::VariableKind::Direction => "every reading approaches from the same direction: reversal errors cannot be tested".to_string(),
+                _ => format!("{} has a single value in these data: errors that depend on it cannot be tested (only their value there, which the base absorbs)", v.name),
+            });
+        }
+    }
+    if obs.setup_names.len() == 1 {
+        notes.push(format!(
+            "one {}: errors that differ between {}s cannot be told from errors common to all",
+            obs.setup_kind, obs.setup_kind
+        ));
+    }
     if obs
         .variable_of_kind(crate::data::VariableKind::Time)
         .is_some()
