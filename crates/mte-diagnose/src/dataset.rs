@@ -19,6 +19,33 @@ impl From<mte_linalg::csv::CsvError> for DiagnoseError {
     }
 }
 
+/// Declares the manifest struct of an `mte-dataset/1` instrument: the fields every kind has
+/// (`format`, `kind`, `description`, `data`, `noise_um`, `base_model`) and the instrument's
+/// own, read by serde with unknown fields rejected.
+macro_rules! dataset_manifest {
+    ($(#[$meta:meta])* $name:ident { $($(#[$fmeta:meta])* $field:ident: $ty:ty,)* }) => {
+        $(#[$meta])*
+        #[derive(Debug, Clone, serde::Deserialize)]
+        #[serde(deny_unknown_fields)]
+        struct $name {
+            #[allow(dead_code)]
+            format: String,
+            #[allow(dead_code)]
+            kind: String,
+            #[serde(default)]
+            description: Option<String>,
+            /// The observation table, relative to the manifest.
+            data: String,
+            #[serde(default)]
+            noise_um: Option<f64>,
+            #[serde(default)]
+            base_model: Option<serde_json::Value>,
+            $($(#[$fmeta])* #[serde(default)] $field: $ty,)*
+        }
+    };
+}
+pub(crate) use dataset_manifest;
+
 /// A manifest read from disk: its JSON value, its path (for messages) and its folder (where
 /// the tables it names are).
 pub(crate) struct ManifestFile {

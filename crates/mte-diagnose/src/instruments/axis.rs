@@ -1,35 +1,21 @@
 //! Bidirectional positioning runs of one axis (laser interferometer, ISO 230-2 style).
 
 use mte_linalg::{DMat, DVec};
-use serde::Deserialize;
 
 use crate::Result;
 use crate::candidate::{SlotEffect, SlotRole};
 use crate::data::{Observations, Variable, VariableKind};
-use crate::dataset::ManifestFile;
+use crate::dataset::{ManifestFile, dataset_manifest};
 use crate::model::{DriftOf, Effects, ObservationModel};
 use crate::term::{Family, Quantity, Summary, Term};
 
-/// The manifest of axis runs (`"format": "mte-dataset/1"`, `"kind": "axis"`).
-#[derive(Debug, Clone, Deserialize)]
-#[serde(deny_unknown_fields)]
-struct Manifest {
-    #[allow(dead_code)]
-    format: String,
-    #[allow(dead_code)]
-    kind: String,
-    #[serde(default)]
-    description: Option<String>,
-    data: String,
-    #[serde(default)]
-    noise_um: Option<f64>,
-    #[serde(default)]
-    noise_arcsec: Option<f64>,
-    #[serde(default)]
-    axis: Option<String>,
-    #[serde(default)]
-    base_model: Option<serde_json::Value>,
-}
+dataset_manifest!(
+    /// The manifest of axis runs (`"kind": "axis"`).
+    Manifest {
+        noise_arcsec: Option<f64>,
+        axis: Option<String>,
+    }
+);
 
 /// Positioning runs of one axis: columns `run`, `direction` (+1/−1), `<axis>_mm` (or
 /// `<axis>_deg` for a rotary axis), optional `t_s`, and `deviation_um` (measured minus

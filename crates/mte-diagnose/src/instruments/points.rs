@@ -20,42 +20,26 @@
 
 use mte_kinematics::Machine;
 use mte_linalg::{DMat, DVec, Mat3, Vec3};
-use serde::Deserialize;
 
 use super::machine::{axis_variables, load_machine, location_names, read_axes, slot_effects};
 use crate::Result;
 use crate::candidate::{BaseModelSpec, SlotEffect, SlotRole};
 use crate::data::{Observations, Variable, VariableKind};
-use crate::dataset::ManifestFile;
+use crate::dataset::{ManifestFile, dataset_manifest};
 use crate::model::{DriftOf, Effects, ObservationModel};
 use crate::term::{Family, Quantity, Term};
 
-/// The manifest of 3-D points (`"format": "mte-dataset/1"`, `"kind": "points"`).
-#[derive(Debug, Clone, Deserialize)]
-#[serde(deny_unknown_fields)]
-struct Manifest {
-    #[allow(dead_code)]
-    format: String,
-    #[allow(dead_code)]
-    kind: String,
-    #[serde(default)]
-    description: Option<String>,
-    /// The points table.
-    data: String,
-    #[serde(default)]
-    noise_um: Option<f64>,
-    #[serde(default)]
-    machine: Option<String>,
-    /// `tool` (default) or `workpiece`: the side of the machine the target is fixed to.
-    #[serde(default)]
-    target: Option<String>,
-    /// The target's offset from the tool tip (tool frame) or from the workpiece origin
-    /// (workpiece frame), mm, when it is calibrated; estimated otherwise.
-    #[serde(default)]
-    target_mm: Option<[f64; 3]>,
-    #[serde(default)]
-    base_model: Option<serde_json::Value>,
-}
+dataset_manifest!(
+    /// The manifest of 3-D points (`"kind": "points"`).
+    Manifest {
+        machine: Option<String>,
+        /// `tool` (default) or `workpiece`: the side of the machine the target is fixed to.
+        target: Option<String>,
+        /// The target's offset from the tool tip (tool frame) or from the workpiece origin
+        /// (workpiece frame), mm, when it is calibrated; estimated otherwise.
+        target_mm: Option<[f64; 3]>,
+    }
+);
 
 /// Where the target sits.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

@@ -14,34 +14,20 @@ use super::machine::{axis_variables, load_machine, read_axes, slot_effects};
 use crate::Result;
 use crate::candidate::{SlotEffect, SlotRole};
 use crate::data::{Observations, Variable, VariableKind};
-use crate::dataset::ManifestFile;
+use crate::dataset::{ManifestFile, dataset_manifest};
 use crate::model::{Effects, ObservationModel};
 use crate::term::{Family, Quantity, Term};
 
-/// The manifest of tracker data (`"format": "mte-dataset/1"`, `"kind": "tracker"`).
-#[derive(Debug, Clone, Deserialize)]
-#[serde(deny_unknown_fields)]
-struct Manifest {
-    #[allow(dead_code)]
-    format: String,
-    #[allow(dead_code)]
-    kind: String,
-    #[serde(default)]
-    description: Option<String>,
-    /// The lengths table: `station`, `target`, `length_mm`.
-    data: String,
-    #[serde(default)]
-    noise_um: Option<f64>,
-    #[serde(default)]
-    machine: Option<String>,
-    #[serde(default)]
-    setups: Vec<Station>,
-    #[serde(default)]
-    base_model: Option<serde_json::Value>,
-    /// The targets table: `id`, commanded axes `<axis>_mm` / `<axis>_deg`, optional `t_s`.
-    #[serde(default)]
-    targets: Option<String>,
-}
+dataset_manifest!(
+    /// The manifest of tracker data (`"kind": "tracker"`); `data` is the lengths table
+    /// (`station`, `target`, `length_mm`).
+    Manifest {
+        machine: Option<String>,
+        setups: Vec<Station>,
+        /// The targets table: `id`, commanded axes `<axis>_mm` / `<axis>_deg`, optional `t_s`.
+        targets: Option<String>,
+    }
+);
 
 /// A station of the manifest: id and approximate position in machine coordinates, mm.
 #[derive(Debug, Clone, Deserialize)]

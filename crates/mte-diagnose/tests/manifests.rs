@@ -1,0 +1,68 @@
+//! Manifests: the instrument is picked from `format` and `kind`, unknown fields are errors, a
+//! UTF-8 byte-order mark is accepted, and messages name the file and the field.
+
+use std::path::PathBuf;
+
+fn fixture() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../fixtures/datasets/x-axis-runs")
+}
+
+/// Writes `manifest` beside a copy of the bundled axis runs and loads it.
+fn load_with(name: &str, manifest: &[u8]) -> Result<mte_diagnose::Prepared, String> {
+    let dir = std::env::temp_dir().join(format!("mte-manifests-{}-{name}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::copy(fixture().join("runs.csv"), dir.join("runs.csv")).unwrap();
+    std::fs::write(dir.join("manifest.json"), manifest).unwrap();
+    mte_diagnose::load(&dir.join("manifest.json")).map_err(|e| e.to_string())
+}
+
+#[test]
+fn a_kind_no_instrument_has_lists_the_kinds() {
+    let err = load_with(
+        "kind",
+        br#"{"format": "mte-dataset/1", "kind": "point", "data": "runs.csv"}"#,
+    )
+    .err()
+    .unwrap();
+    assert!(
+        err.contains("manifest.json")
+            && err.contains("`point`")
+            && err.contains("axis, tracker, points"),
+        "{err}"
+    );
+}
+
+#[test]
+fn an_unknown_field_is_an_error_naming_it() {
+    let err = load_with(
+        "unknown",
+        br#"{"format": "mte-dataset/1", "kind": "axis", "axis": "X", "data": "runs.csv", "noise_um": 0.3, "noise_unit": "um"}"#,
+    )
+    .err()
+    .unwrap();
+    assert!(
+        err.contains("manifest.json") && err.contains("noise_unit"),
+        "{err}"
+    );
+}
+
+#[test]
+fn a_byte_order_mark_is_accepted() {
+    let mut text = b"\xEF\xBB\xBF".to_vec();
+    text.extend_from_slice(
+        br#"{"format": "mte-dataset/1", "kind": "axis", "axis": "X", "data": "runs.csv", "noise_um": 0.3}"#,
+    );
+    let p = load_with("bom", &text).unwrap();
+    assert!(p.observations.len() > 100);
+}
+
+#[test]
+fn a_missing_format_says_which_are_read() {
+    let err = load_with("format", br#"{"kind": "axis", "data": "runs.csv"}"#)
+        .err()
+        .unwrap();
+    assert!(
+        err.contains("field `format`: missing") && err.contains("mte-rtest/1"),
+        "{err}"
+    );
+}
