@@ -1,5 +1,7 @@
 #![doc = include_str!("../README.md")]
 
+pub mod limits;
+pub mod output;
 pub mod plot;
 pub mod report;
 

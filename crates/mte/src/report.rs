@@ -293,11 +293,20 @@ pub fn write_json<T: serde::Serialize + ?Sized>(path: &Path, value: &T) -> Resul
 /// [`CliError::Io`] if the file cannot be read, [`CliError::Json`] (with line and column) if it
 /// does not parse into `T`.
 pub fn read_json<T: serde::de::DeserializeOwned>(path: &Path) -> Result<T, CliError> {
-    let text = std::fs::read_to_string(path).map_err(|source| CliError::Io {
+    let text = read_text(path)?;
+    serde_json::from_str(&text).map_err(|source| CliError::Json {
         path: path.to_path_buf(),
         source,
-    })?;
-    serde_json::from_str(&text).map_err(|source| CliError::Json {
+    })
+}
+
+/// Reads a user's text file with [`mte_linalg::text::read_text`]: regular files only (a FIFO
+/// would block), a UTF-8 byte-order mark dropped.
+///
+/// # Errors
+/// [`CliError::Io`] naming the file.
+pub fn read_text(path: &Path) -> Result<String, CliError> {
+    mte_linalg::text::read_text(path).map_err(|source| CliError::Io {
         path: path.to_path_buf(),
         source,
     })
