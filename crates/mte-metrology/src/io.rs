@@ -27,7 +27,8 @@ pub const MAX_DEAD_PATH_MM: f64 = 1e5;
 /// interferometer resolves less) to 10 mm (exclusive).
 pub const SIGMA_RANGE_UM: (f64, f64) = (1e-3, 1e4);
 
-const COORD_MEANING: &str = "a station or target 1 km or more from the origin is not a machine-tool measurement (mm)";
+const COORD_MEANING: &str =
+    "a station or target 1 km or more from the origin is not a machine-tool measurement (mm)";
 
 /// Every id of a table once: a second occurrence names both lines.
 fn unique_ids(c: &CsvTable, col: usize, kind: &str) -> Result<()> {

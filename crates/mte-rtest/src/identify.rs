@@ -487,9 +487,8 @@ pub fn identify(m: &Machine, data: &Dataset, spec: &FitSpec) -> Result<Fit> {
                 (PLAUSIBLE_LENGTH_MM, "mm")
             };
             let u = e.std_uncertainty.unwrap_or(0.0);
-            (!(e.value.abs() <= limit && u <= limit)).then(|| {
-                format!("{} = {:.3e} ± {:.3e} {unit}", e.label, e.value, u)
-            })
+            (!(e.value.abs() <= limit && u <= limit))
+                .then(|| format!("{} = {:.3e} ± {:.3e} {unit}", e.label, e.value, u))
         })
         .collect();
     if !implausible.is_empty() {

@@ -22,7 +22,8 @@ pub const MAX_TIME_S: f64 = 1e9;
 /// Largest |sensor reading| the reader accepts, µm (exclusive): 100 mm, far beyond any
 /// R-test sensor's range.
 pub const MAX_READING_UM: f64 = 1e5;
-const READING_MEANING: &str = "a ball-to-nest displacement of 100 mm or more is not an R-test reading (µm)";
+const READING_MEANING: &str =
+    "a ball-to-nest displacement of 100 mm or more is not an R-test reading (µm)";
 
 /// One setup as written in the manifest (angles in degrees).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -136,30 +137,45 @@ pub fn dataset_from_str(
         if let Some(j) = man.setups[..i].iter().position(|o| o.id == s.id) {
             return Err(bad(
                 format!("{manifest_name}: setups[{i}].id"),
-                format!("setup id `{}` appears twice (setups[{j}] and setups[{i}])", s.id),
+                format!(
+                    "setup id `{}` appears twice (setups[{j}] and setups[{i}])",
+                    s.id
+                ),
             ));
         }
         for (name, v) in [("ball_mm", s.ball_mm), ("nest_mm", s.nest_mm)] {
             if let Some(x) = v.iter().find(|x| x.abs() >= MAX_COORDINATE_MM) {
                 return Err(bad(
                     format!("{manifest_name}: setups[{i}].{name}"),
-                    format!("{x:e} mm is out of range (|value| < 1e6 mm): a ball or nest 1 km away is not an R-test setup"),
+                    format!(
+                        "{x:e} mm is out of range (|value| < 1e6 mm): a ball or nest 1 km away is not an R-test setup"
+                    ),
                 ));
             }
         }
         for (a, v) in &s.centring {
-            let limit = if rotary(a) { MAX_ANGLE_DEG } else { MAX_COORDINATE_MM };
+            let limit = if rotary(a) {
+                MAX_ANGLE_DEG
+            } else {
+                MAX_COORDINATE_MM
+            };
             if v.abs() >= limit {
                 return Err(bad(
                     format!("{manifest_name}: setups[{i}].centring.{a}"),
-                    format!("{v:e} is out of range (|value| < {limit:e} {})", if rotary(a) { "deg" } else { "mm" }),
+                    format!(
+                        "{v:e} is out of range (|value| < {limit:e} {})",
+                        if rotary(a) { "deg" } else { "mm" }
+                    ),
                 ));
             }
         }
         if s.centring_t_s.abs() >= MAX_TIME_S {
             return Err(bad(
                 format!("{manifest_name}: setups[{i}].centring_t_s"),
-                format!("{:e} s is out of range (|value| < 1e9 s, 30 years)", s.centring_t_s),
+                format!(
+                    "{:e} s is out of range (|value| < 1e9 s, 30 years)",
+                    s.centring_t_s
+                ),
             ));
         }
     }
@@ -193,7 +209,11 @@ pub fn dataset_from_str(
     let mut readings = Vec::new();
     let mut seen: std::collections::HashMap<Vec<&str>, usize> = std::collections::HashMap::new();
     for r in 0..table.len() {
-        let mut key: Vec<&str> = vec![table.text(r, c_setup), table.text(r, c_test), table.text(r, c_t)];
+        let mut key: Vec<&str> = vec![
+            table.text(r, c_setup),
+            table.text(r, c_test),
+            table.text(r, c_t),
+        ];
         key.extend(c_axes.iter().map(|&c| table.text(r, c)));
         if let Some(first) = seen.insert(key, table.line(r)) {
             return Err(bad(
@@ -216,17 +236,32 @@ pub fn dataset_from_str(
             .map(|(a, &c)| {
                 Ok(if rotary(a) {
                     table
-                        .number_within(r, c, MAX_ANGLE_DEG, "an axis angle of 10^5 degrees or more is not a command")?
+                        .number_within(
+                            r,
+                            c,
+                            MAX_ANGLE_DEG,
+                            "an axis angle of 10^5 degrees or more is not a command",
+                        )?
                         .to_radians()
                 } else {
-                    table.number_within(r, c, MAX_COORDINATE_MM, "an axis 1 km or more from its origin is not a command (mm)")?
+                    table.number_within(
+                        r,
+                        c,
+                        MAX_COORDINATE_MM,
+                        "an axis 1 km or more from its origin is not a command (mm)",
+                    )?
                 })
             })
             .collect::<Result<Vec<f64>>>()?;
         readings.push(Reading {
             setup,
             test: table.text(r, c_test).to_string(),
-            t_s: table.number_within(r, c_t, MAX_TIME_S, "a time of 10^9 s (30 years) or more is not a reading time")?,
+            t_s: table.number_within(
+                r,
+                c_t,
+                MAX_TIME_S,
+                "a time of 10^9 s (30 years) or more is not a reading time",
+            )?,
             q,
             d_mm: Vec3::new(
                 table.number_within(r, c_d[0], MAX_READING_UM, READING_MEANING)? * 1e-3,

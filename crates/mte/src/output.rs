@@ -160,7 +160,10 @@ mod tests {
         let f = d.join("taken");
         std::fs::write(&f, "x").unwrap();
         let err = OutDir::prepare(&f).unwrap_err().to_string();
-        assert!(err.contains("taken") && err.contains("not a folder"), "{err}");
+        assert!(
+            err.contains("taken") && err.contains("not a folder"),
+            "{err}"
+        );
         std::fs::remove_dir_all(&d).unwrap();
     }
 

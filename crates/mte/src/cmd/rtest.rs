@@ -5,8 +5,8 @@ use std::path::{Path, PathBuf};
 
 use mte::CliError;
 use mte::output::OutDir;
-use mte::report::read_text;
 use mte::plot::{Axis, Series, XyChart};
+use mte::report::read_text;
 use mte_kinematics::Machine;
 use mte_linalg::Vec3;
 use mte_rtest::io::{dataset_to_strings, read_dataset};
@@ -255,10 +255,7 @@ pub fn run(args: &Args) -> Result<(), CliError> {
                             CliError::Usage(format!("--centring: `{v}` is not a finite number"))
                         })?;
                     let k = m.axis_index(a.trim()).ok_or_else(|| {
-                        CliError::Usage(format!(
-                            "--centring: unknown axis `{}` in `{c}`",
-                            a.trim()
-                        ))
+                        CliError::Usage(format!("--centring: unknown axis `{}` in `{c}`", a.trim()))
                     })?;
                     let ax = &m.axes()[k];
                     if !matches!(ax.kind, mte_kinematics::AxisKind::Rotary) {

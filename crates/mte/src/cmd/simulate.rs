@@ -5,8 +5,8 @@ use std::fmt::Write;
 use std::path::{Path, PathBuf};
 
 use mte::CliError;
-use mte::plot::{Axis, FieldMap, Series, XyChart, heat_arrow_map};
 use mte::output::OutDir;
+use mte::plot::{Axis, FieldMap, Series, XyChart, heat_arrow_map};
 use mte::report::read_text;
 use mte_errors::volumetric::{
     Grid, Method, Point, VolumetricResult, poses_from_csv, program_from_csv, simulate,
@@ -112,7 +112,9 @@ fn parse_grid(m: &Machine, args: &Args) -> Result<Grid, CliError> {
     let allow = args.allow_outside_stroke;
     let mut g = Grid::over_strokes(m, args.n);
     if args.n == 0 && args.grid.is_none() {
-        return Err(CliError::Usage("--n: needs at least 1 point per axis".into()));
+        return Err(CliError::Usage(
+            "--n: needs at least 1 point per axis".into(),
+        ));
     }
     if let Some(spec) = args.grid.as_deref() {
         g.axes.clear();
@@ -163,8 +165,7 @@ fn parse_grid(m: &Machine, args: &Args) -> Result<Grid, CliError> {
                     }
                 }
             }
-            g.axes
-                .push((m.axes()[k].name.clone(), lo_i, hi_i, cnt));
+            g.axes.push((m.axes()[k].name.clone(), lo_i, hi_i, cnt));
         }
         if g.axes.is_empty() {
             return Err(CliError::Usage(format!(
