@@ -641,30 +641,6 @@ fn input_from_json(v: &Value, index: usize) -> Result<Input> {
         .map(str::to_string)
         .unwrap_or_else(|| format!("x{}", index + 1));
     let label = format!("{name} (inputs[{index}])");
-    if let Some(o) = v.as_object() {
-        const KNOWN: [&str; 8] = [
-            "name",
-            "dist",
-            "mean",
-            "sd",
-            "lo",
-            "hi",
-            "half_width",
-            "coverage",
-        ];
-        if let Some(k) = o.keys().find(|k| !KNOWN.contains(&k.as_str())) {
-            return Err(Error::InvalidInput {
-                input: label,
-                field: k.clone(),
-                message: format!("unknown field; expected {}", KNOWN.join(", ")),
-            });
-        }
-    } else {
-        return Err(Error::Json {
-            context: format!("inputs[{index}]"),
-            message: "must be an object {\"name\": …, \"dist\": …}".into(),
-        });
-    }
     let num = |field: &str| -> Result<f64> {
         v.get(field)
             .and_then(Value::as_f64)
@@ -720,6 +696,30 @@ fn input_from_json(v: &Value, index: usize) -> Result<Input> {
             });
         }
     };
+    if let Some(o) = v.as_object() {
+        const KNOWN: [&str; 8] = [
+            "name",
+            "dist",
+            "mean",
+            "sd",
+            "lo",
+            "hi",
+            "half_width",
+            "coverage",
+        ];
+        if let Some(k) = o.keys().find(|k| !KNOWN.contains(&k.as_str())) {
+            return Err(Error::InvalidInput {
+                input: label,
+                field: k.clone(),
+                message: format!("unknown field; expected {}", KNOWN.join(", ")),
+            });
+        }
+    } else {
+        return Err(Error::Json {
+            context: format!("inputs[{index}]"),
+            message: "must be an object {\"name\": …, \"dist\": …}".into(),
+        });
+    }
     dist.validate(&label)?;
     Ok(Input { name, dist })
 }

@@ -786,82 +786,6 @@ fn header(labels: impl Iterator<Item = (String, bool)>) -> String {
         .collect()
 }
 
-/// Format tag of a problem file.
-const FORMAT: &str = "mte-sensitivity/1";
-
-/// The problem file's own fields: `format` present and right, no unknown or misspelt field at
-/// the top level or in `model` (the method sections and inputs are checked by the library).
-fn check_fields(v: &Value, path: &Path) -> Result<(), CliError> {
-    let Some(o) = v.as_object() else {
-        return Err(CliError::Library(format!(
-            "{}: expected a JSON object {{\"format\": \"{FORMAT}\", …}}",
-            path.display()
-        )));
-    };
-    match o.get("format") {
-        Some(Value::String(f)) if f == FORMAT => {}
-        Some(f) => {
-            return Err(field_err(
-                path,
-                "format",
-                format!("{f}, expected \"{FORMAT}\""),
-            ));
-        }
-        None => {
-            return Err(field_err(
-                path,
-                "format",
-                format!("missing; expected \"format\": \"{FORMAT}\""),
-            ));
-        }
-    }
-    let unknown = |keys: &serde_json::Map<String, Value>, known: &[&str], at: &str| match keys
-        .keys()
-        .find(|k| !known.contains(&k.as_str()))
-    {
-        Some(k) => {
-            let near = mte_linalg::text::closest(k, known, 1);
-            Err(field_err(
-                path,
-                &format!("{at}{k}"),
-                format!(
-                    "unknown field{}; expected one of {}",
-                    near.first()
-                        .map(|n| format!(" (did you mean `{n}`?)"))
-                        .unwrap_or_default(),
-                    known.join(", ")
-                ),
-            ))
-        }
-        None => Ok(()),
-    };
-    unknown(
-        o,
-        &[
-            "format",
-            "description",
-            "inputs",
-            "correlation",
-            "model",
-            "sobol",
-            "pce",
-            "morris",
-        ],
-        "",
-    )?;
-    if let Some(Value::Object(m)) = o.get("model") {
-        let known: &[&str] = match m.get("name").and_then(Value::as_str) {
-            Some("machine") => &["name", "machine", "errors", "points", "linearisation"],
-            _ => &["name", "a", "coef"],
-        };
-        unknown(m, known, "model.")?;
-        if let Some(Value::Object(p)) = m.get("points") {
-            unknown(p, &["csv", "diagonals"], "model.points.")?;
-        }
-    }
-    Ok(())
-}
-
 /// Bytes a Sobol' analysis holds: the Latin-hypercube permutations (n × 2k × 4 bytes, the
 /// largest), each thread's block of model runs (inputs and outputs), and the per-block sums.
 fn sobol_bytes(p: &mte_sensitivity::sobol::SobolParams, k: usize, m: usize) -> f64 {
@@ -901,10 +825,7 @@ fn pce_bytes(p: &mte_sensitivity::pce::PceParams, k: usize, m: usize) -> f64 {
 pub fn run(args: &Args) -> Result<(), CliError> {
     let mut out = OutDir::prepare(&args.out)?;
     let path = &args.problem;
-    let text = read_text(path)?;
-    let v: Value = serde_json::from_str(&text)
-        .map_err(|e| CliError::Library(format!("{}: line {}: {e}", path.display(), e.line())))?;
-    check_fields(&v, path)?;
+    let v = mte::problem::read_problem(path)?;
     let st = study(&v, path, args.allow_outside_stroke)?;
     let names = st.problem.names();
     let mut ix = analyse(args, &v, &st, path)?;
