@@ -312,6 +312,24 @@ pub fn read_text(path: &Path) -> Result<String, CliError> {
     })
 }
 
+/// Refuses a path that exists but is not a regular file (a FIFO or device would block the
+/// reader that opens it). A missing path passes: its reader reports it.
+///
+/// # Errors
+/// [`CliError::Io`] naming the file.
+pub fn check_regular_file(path: &Path) -> Result<(), CliError> {
+    match std::fs::metadata(path) {
+        Ok(m) if !m.is_file() => Err(CliError::Io {
+            path: path.to_path_buf(),
+            source: std::io::Error::new(
+                std::io::ErrorKind::InvalidInput,
+                "not a regular file (a directory, FIFO or device cannot be read as data)",
+            ),
+        }),
+        _ => Ok(()),
+    }
+}
+
 /// Writes text (Markdown, SVG, CSV) to `path`, creating parent directories.
 ///
 /// # Errors

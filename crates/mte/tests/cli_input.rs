@@ -728,3 +728,98 @@ fn rtest_manifest_duplicate_setup_and_huge_reading_are_named() {
         ],
     );
 }
+
+#[test]
+fn a_byte_order_mark_is_accepted_in_json_and_csv() {
+    let d = scratch("bom");
+    let mut problem = b"\xEF\xBB\xBF".to_vec();
+    problem.extend_from_slice(
+        br#"{"format": "mte-sensitivity/1", "inputs": [{"name": "a", "dist": "normal", "sd": 1}],
+            "model": {"name": "linear", "coef": [2]}}"#,
+    );
+    let p = d.join("problem.json");
+    std::fs::write(&p, problem).unwrap();
+    let (ok, err) = mte(&[
+        "sensitivity",
+        "local",
+        "--problem",
+        &s(&p),
+        "--out",
+        &s(&d.join("o")),
+    ]);
+    assert!(ok, "{err}");
+    let mut runs = b"\xEF\xBB\xBF".to_vec();
+    runs.extend(std::fs::read(root().join("fixtures/iso230-2/worked-example.csv")).unwrap());
+    let r = d.join("runs.csv");
+    std::fs::write(&r, runs).unwrap();
+    let (ok, err) = mte(&["iso230-2", &s(&r), "--out", &s(&d.join("i"))]);
+    assert!(ok, "{err}");
+}
+
+#[cfg(unix)]
+#[test]
+fn a_fifo_as_error_set_or_machine_is_refused_not_read() {
+    let d = scratch("fifo2");
+    let fifo = d.join("errors.json");
+    if !Command::new("mkfifo")
+        .arg(&fifo)
+        .status()
+        .map(|s| s.success())
+        .unwrap_or(false)
+    {
+        eprintln!("mkfifo not available; skipped");
+        return;
+    }
+    fails_with(
+        &[
+            "simulate",
+            "--machine",
+            "seed003-ac-table",
+            "--errors",
+            &s(&fifo),
+            "--out",
+            &s(&d.join("o")),
+        ],
+        &["errors.json", "not a regular file"],
+    );
+    fails_with(
+        &[
+            "simulate",
+            "--machine",
+            &s(&fifo),
+            "--errors",
+            &s(&fifo),
+            "--out",
+            &s(&d.join("o")),
+        ],
+        &["errors.json", "not a regular file"],
+    );
+}
+
+#[test]
+fn rtest_identify_refuses_a_centring_outside_the_stroke() {
+    let d = scratch("rtest-centring");
+    let fx = root().join("fixtures/rtest");
+    for f in ["seed002-two-positions.json", "seed002-two-positions.csv"] {
+        std::fs::copy(fx.join(f), d.join(f)).unwrap();
+    }
+    let man = d.join("seed002-two-positions.json");
+    let text = std::fs::read_to_string(&man).unwrap();
+    std::fs::write(&man, text.replace("\"Z\": -40.0", "\"Z\": -40000.0")).unwrap();
+    fails_with(
+        &[
+            "rtest",
+            "identify",
+            "--manifest",
+            &s(&man),
+            "--out",
+            &s(&d.join("o")),
+        ],
+        &[
+            "seed002-two-positions.json",
+            "centring.Z",
+            "outside the stroke",
+            "--allow-outside-stroke",
+        ],
+    );
+}

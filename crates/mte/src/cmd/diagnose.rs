@@ -26,6 +26,7 @@ pub struct Args {
 /// Runs the diagnosis and writes the report.
 pub fn run(args: &Args) -> Result<(), CliError> {
     let mut out = mte::output::OutDir::prepare(&args.out)?;
+    mte::report::check_regular_file(&args.manifest)?;
     let prepared = load_with_noise(&args.manifest, args.noise_um)
         .map_err(|e| CliError::Library(e.to_string()))?;
     let params = DiagnoseParams {

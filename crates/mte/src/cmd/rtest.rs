@@ -62,6 +62,9 @@ enum Sub {
         /// Extra parameters by ISO name (comma separated), e.g. "EA0Y".
         #[arg(long, default_value = "")]
         params: String,
+        /// Accept setups centred outside an axis's stroke (an error otherwise).
+        #[arg(long)]
+        allow_outside_stroke: bool,
         /// Output folder.
         #[arg(long, default_value = "out/rtest-identify")]
         out: PathBuf,
@@ -328,6 +331,7 @@ pub fn run(args: &Args) -> Result<(), CliError> {
             manifest,
             squareness,
             params,
+            allow_outside_stroke,
             out,
         } => {
             let mut outdir = OutDir::prepare(out)?;
@@ -338,8 +342,37 @@ pub fn run(args: &Args) -> Result<(), CliError> {
                 CliError::Library(format!("{}: missing field `machine`", manifest.display()))
             })?;
             let dir = manifest.parent().unwrap_or(Path::new("."));
+            if !Machine::library_names().contains(&mname) {
+                mte::report::check_regular_file(&dir.join(mname))?;
+            }
             let m = Machine::library_or_file(mname, dir).map_err(lib)?;
             let ds = read_dataset(manifest, &rotary(&m)).map_err(lib)?;
+            if !allow_outside_stroke {
+                for (i, s) in ds.setups.iter().enumerate() {
+                    for (name, v) in ds.axis_names.iter().zip(&s.centring_q) {
+                        let Some(k) = m.axis_index(name) else {
+                            continue;
+                        };
+                        let ax = &m.axes()[k];
+                        let (lo, hi) = ax.stroke;
+                        let tol = 1e-9 * (1.0 + lo.abs().max(hi.abs()));
+                        if *v < lo - tol || *v > hi + tol {
+                            let (f, unit) = if rotary(&m)(name) {
+                                (180.0 / std::f64::consts::PI, "deg")
+                            } else {
+                                (1.0, "mm")
+                            };
+                            return Err(CliError::Library(format!(
+                                "{}: setups[{i}].centring.{name}: {} {unit} is outside the stroke [{}, {}] {unit}; pass --allow-outside-stroke to identify anyway",
+                                manifest.display(),
+                                v * f,
+                                lo * f,
+                                hi * f
+                            )));
+                        }
+                    }
+                }
+            }
             let mut spec = FitSpec::pivots(&m).map_err(lib)?;
             if *squareness {
                 spec = spec.with_squareness(&m).map_err(lib)?;

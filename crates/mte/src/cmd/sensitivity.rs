@@ -286,6 +286,7 @@ fn machine_study(
     let machine =
         super::machine::load(&machine_arg).map_err(|e| field_err(path, "model.machine", e))?;
     let errors_path = dir.join(text_of("errors")?);
+    mte::report::check_regular_file(&errors_path)?;
     let set = ErrorSet::from_file(&errors_path).map_err(|e| field_err(path, "model.errors", e))?;
     let mode = match mv.get("linearisation").map(|l| l.as_str()) {
         None | Some(Some("first_order")) => Linearisation::FirstOrder,

@@ -243,6 +243,7 @@ fn check_strokes(m: &Machine, points: &[Point], file: &Path) -> Result<(), CliEr
 pub fn run(args: &Args) -> Result<(), CliError> {
     let mut out = OutDir::prepare(&args.out)?;
     let m = super::machine::load(&args.machine)?;
+    mte::report::check_regular_file(&args.errors)?;
     let set = ErrorSet::from_file(&args.errors).map_err(lib)?;
     let ev = Evaluator::new(&m, &set).map_err(lib)?;
     let (source, points, grid) = if let Some(p) = &args.program {
