@@ -206,6 +206,9 @@ fn mutations() -> impl Strategy<Value = (u64, Vec<Mutation>)> {
     )
 }
 
+/// Reads an input from a folder, given the index of the mutated file.
+type ReadFn = Box<dyn Fn(&Path, usize) -> Result<(), String>>;
+
 /// One reader under test: its input files (the fixtures to copy into a scratch folder) and the
 /// call that reads them from that folder.
 struct Reader {
@@ -217,7 +220,7 @@ struct Reader {
     /// Whether an error must name the file (false only where a known gap is reported).
     names_file: bool,
     /// Reads the input from the folder; the argument is the index of the mutated file.
-    read: Box<dyn Fn(&Path, usize) -> Result<(), String>>,
+    read: ReadFn,
 }
 
 fn fixture(rel: &str) -> Vec<u8> {
