@@ -252,6 +252,21 @@ fn memory_is_refused_with_the_figure_before_allocating() {
             "GB; this limit is 4 GB",
         ],
     );
+    let p = study(&|v| v["morris"]["r"] = 1_000_000_000_000u64.into());
+    fails_with(
+        &[
+            "sensitivity",
+            "morris",
+            "--problem",
+            &s(&p),
+            "--out",
+            &s(&d.join("s")),
+        ],
+        &[
+            "Morris with r = 1000000000000 over 41 inputs",
+            "GB; this limit is 4 GB",
+        ],
+    );
     let p = study(&|v| v["pce"]["degree"] = 12.into());
     fails_with(
         &[

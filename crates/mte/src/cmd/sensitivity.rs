@@ -710,6 +710,17 @@ fn analyse(args: &Args, v: &Value, st: &Study, path: &Path) -> Result<Indices, C
         }
         Method::Morris => {
             let p: mte_sensitivity::morris::MorrisParams = params(v, "morris", path)?;
+            let (k, m) = (problem.dim() as f64, model.n_outputs() as f64);
+            mte::limits::check_memory(
+                &format!(
+                    "{}: Morris with r = {} over {} inputs",
+                    path.display(),
+                    p.r,
+                    problem.dim()
+                ),
+                // every trajectory's k + 1 points, their model outputs and elementary effects
+                p.r as f64 * (k + 1.0) * (2.0 * k + m) * 8.0,
+            )?;
             let r =
                 mte_sensitivity::morris::morris(&model, problem, &p).map_err(|e| lib(e, path))?;
             let rows = r
@@ -816,7 +827,10 @@ fn pce_bytes(p: &mte_sensitivity::pce::PceParams, k: usize, m: usize) -> f64 {
         candidates *= (k + i) as f64 / i as f64;
     }
     let n = p.n_samples as f64;
-    2.0 * 8.0 * n * candidates + 8.0 * candidates * k as f64 + 8.0 * n * (k + m) as f64
+    let validation = p.validation.map_or(0.0, |v| v.n as f64);
+    2.0 * 8.0 * n * candidates
+        + 8.0 * candidates * k as f64
+        + 8.0 * (n + validation) * (k + m) as f64
 }
 
 /// Runs the subcommand.
