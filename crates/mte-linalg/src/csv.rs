@@ -149,6 +149,41 @@ impl CsvTable {
         Err(self.error(*line, format!("column `{}`: `{s}` {what}", self.headers[c])))
     }
 
+    /// The number in row `r`, column `c`, which must be physically possible: |value| below
+    /// `max_abs`, which `meaning` explains (e.g. `"a deviation of 1 m (10^6 µm) or more is not a
+    /// measured positioning error"`).
+    ///
+    /// ```
+    /// use mte_linalg::csv::CsvTable;
+    /// let t = CsvTable::parse("deviation_um\n1e150\n", "runs.csv").unwrap();
+    /// let err = t.number_within(0, 0, 1e6, "1 m or more is not a positioning error").unwrap_err();
+    /// assert_eq!(err.to_string(), "runs.csv: line 2: column `deviation_um`: `1e150` is out of range (|value| < 1e6): 1 m or more is not a positioning error");
+    /// ```
+    ///
+    /// # Errors
+    /// As [`CsvTable::number`], and [`CsvError`] naming the line and column for a value out
+    /// of range.
+    pub fn number_within(
+        &self,
+        r: usize,
+        c: usize,
+        max_abs: f64,
+        meaning: &str,
+    ) -> Result<f64, CsvError> {
+        let v = self.number(r, c)?;
+        if v.abs() < max_abs {
+            return Ok(v);
+        }
+        let (line, f) = &self.rows[r];
+        Err(self.error(
+            *line,
+            format!(
+                "column `{}`: `{}` is out of range (|value| < {max_abs:e}): {meaning}",
+                self.headers[c], f[c]
+            ),
+        ))
+    }
+
     /// The numbers of column `c`, every row.
     ///
     /// # Errors

@@ -17,6 +17,37 @@ fn perr(src: &str, line: usize, what: impl Into<String>) -> MetrologyError {
     }
 }
 
+/// Largest |coordinate| of a station or target the reader accepts, mm (exclusive): 1 km.
+pub const MAX_COORDINATE_MM: f64 = 1e6;
+/// Largest measured length the reader accepts, mm (exclusive): 1 km.
+pub const MAX_LENGTH_MM: f64 = 1e6;
+/// Largest |dead path| the reader accepts, mm (exclusive): 100 m.
+pub const MAX_DEAD_PATH_MM: f64 = 1e5;
+/// Range of a length's standard uncertainty the reader accepts, µm: from 1 nm (no
+/// interferometer resolves less) to 10 mm (exclusive).
+pub const SIGMA_RANGE_UM: (f64, f64) = (1e-3, 1e4);
+
+const COORD_MEANING: &str =
+    "a station or target 1 km or more from the origin is not a machine-tool measurement (mm)";
+
+/// Every id of a table once: a second occurrence names both lines.
+fn unique_ids(c: &CsvTable, col: usize, kind: &str) -> Result<()> {
+    let mut seen: HashMap<&str, usize> = HashMap::new();
+    for (line, f) in &c.rows {
+        if let Some(first) = seen.insert(f[col].as_str(), *line) {
+            return Err(perr(
+                &c.source_name,
+                *line,
+                format!(
+                    "field `id`: duplicate {kind} id `{}`, first on line {first}",
+                    f[col]
+                ),
+            ));
+        }
+    }
+    Ok(())
+}
+
 /// Build a network from three CSV texts:
 /// * stations: `id,x_mm,y_mm,z_mm[,dead_path_mm][,dead_path]` (`dead_path` = `free` | `fixed`, default `free`);
 /// * targets: `id,x_mm,y_mm,z_mm` (nominal, commanded positions);
@@ -48,6 +79,7 @@ pub fn network_from_csv(
     );
     let cd = sc.column("dead_path_mm");
     let cf = sc.column("dead_path");
+    unique_ids(&sc, ci, "station")?;
     let mut st = Vec::new();
     for (i, r) in sc.rows.iter().enumerate() {
         let dp = match cf.map(|c| r.1[c].to_ascii_lowercase()) {
@@ -64,9 +96,18 @@ pub fn network_from_csv(
         };
         st.push(Station {
             id: r.1[ci].clone(),
-            position_mm: Vec3::new(sc.number(i, cx)?, sc.number(i, cy)?, sc.number(i, cz)?),
+            position_mm: Vec3::new(
+                sc.number_within(i, cx, MAX_COORDINATE_MM, COORD_MEANING)?,
+                sc.number_within(i, cy, MAX_COORDINATE_MM, COORD_MEANING)?,
+                sc.number_within(i, cz, MAX_COORDINATE_MM, COORD_MEANING)?,
+            ),
             dead_path_mm: match cd {
-                Some(c) => sc.number(i, c)?,
+                Some(c) => sc.number_within(
+                    i,
+                    c,
+                    MAX_DEAD_PATH_MM,
+                    "a dead path of 100 m or more is not a tracker's (mm)",
+                )?,
                 None => 0.0,
             },
             dead_path: dp,
@@ -79,11 +120,16 @@ pub fn network_from_csv(
         tc.require("y_mm")?,
         tc.require("z_mm")?,
     );
+    unique_ids(&tc, ti, "target")?;
     let mut tg = Vec::new();
     for (i, r) in tc.rows.iter().enumerate() {
         tg.push(Target {
             id: r.1[ti].clone(),
-            nominal_mm: Vec3::new(tc.number(i, tx)?, tc.number(i, ty)?, tc.number(i, tz)?),
+            nominal_mm: Vec3::new(
+                tc.number_within(i, tx, MAX_COORDINATE_MM, COORD_MEANING)?,
+                tc.number_within(i, ty, MAX_COORDINATE_MM, COORD_MEANING)?,
+                tc.number_within(i, tz, MAX_COORDINATE_MM, COORD_MEANING)?,
+            ),
         });
     }
     let smap: HashMap<&str, usize> = st
@@ -119,7 +165,12 @@ pub fn network_from_csv(
                 format!("field `target`: unknown target id `{}`", r.1[lt]),
             )
         })?;
-        let l = lc.number(i, ll)?;
+        let l = lc.number_within(
+            i,
+            ll,
+            MAX_LENGTH_MM,
+            "a length of 1 km or more is not a tracker measurement (mm)",
+        )?;
         if l < 0.0 {
             return Err(perr(
                 &lc.source_name,
@@ -130,11 +181,14 @@ pub fn network_from_csv(
         let sigma_mm = match lsig {
             Some(c) => {
                 let v = lc.number(i, c)?;
-                if v <= 0.0 {
+                if !(SIGMA_RANGE_UM.0..SIGMA_RANGE_UM.1).contains(&v) {
                     return Err(perr(
                         &lc.source_name,
                         r.0,
-                        format!("field `sigma_um`: must be > 0, got {v}"),
+                        format!(
+                            "column `sigma_um`: `{}` is out of range [{:e}, {:e}) µm: no length is measured better than 1 nm or worse than 10 mm",
+                            r.1[c], SIGMA_RANGE_UM.0, SIGMA_RANGE_UM.1
+                        ),
                     ));
                 }
                 v * 1e-3

@@ -115,7 +115,8 @@ fn range<I: Iterator<Item = f64> + Clone>(it: I) -> f64 {
 /// Evaluate bidirectional runs.
 ///
 /// # Errors
-/// Non-finite values, fewer than 2 targets, fewer than 2 runs in a direction, or different
+/// Non-finite values, a deviation of [`MAX_DEVIATION_UM`] or more or a target of
+/// [`MAX_TARGET_MM`] or more, fewer than 2 targets, fewer than 2 runs in a direction, or different
 /// run counts between targets/directions, naming the target.
 ///
 /// ```
@@ -138,6 +139,12 @@ pub fn evaluate(readings: &[Reading]) -> Result<AxisResult> {
             return Err(invalid(format!(
                 "reading #{k} (target {} mm, run {}): value not finite",
                 r.target_mm, r.run
+            )));
+        }
+        if r.target_mm.abs() >= MAX_TARGET_MM || r.deviation_um.abs() >= MAX_DEVIATION_UM {
+            return Err(invalid(format!(
+                "reading #{k} (target {} mm, run {}): deviation {} µm or target out of range (|deviation| < 1 m, |target| < 100 m)",
+                r.target_mm, r.run, r.deviation_um
             )));
         }
         // key targets on 1 nm
@@ -237,11 +244,18 @@ pub fn evaluate(readings: &[Reading]) -> Result<AxisResult> {
     Ok(res)
 }
 
+/// Largest |deviation| the reader accepts, µm (exclusive): 1 m.
+pub const MAX_DEVIATION_UM: f64 = 1e6;
+/// Largest |target position| the reader accepts, mm (exclusive): 100 m.
+pub const MAX_TARGET_MM: f64 = 1e5;
+
 /// Read ISO 230-2 runs from CSV with header `target_mm,run,direction,deviation_um`
 /// (`direction` = `up`/`+` or `down`/`-`).
 ///
 /// # Errors
-/// Parse errors naming the source, line and field.
+/// Parse errors naming the source, line and field: a value that is not a finite number, a
+/// deviation of [`MAX_DEVIATION_UM`] or more, a target of [`MAX_TARGET_MM`] or more, a second
+/// reading of the same target, run and direction (naming both lines).
 pub fn readings_from_csv(source_name: &str, text: &str) -> Result<Vec<Reading>> {
     let c = CsvTable::parse(text, source_name)?;
     let (ct, cr, cd, cx) = (
@@ -251,6 +265,7 @@ pub fn readings_from_csv(source_name: &str, text: &str) -> Result<Vec<Reading>> 
         c.require("deviation_um")?,
     );
     let mut out = Vec::new();
+    let mut seen: BTreeMap<(i64, usize, Direction), usize> = BTreeMap::new();
     for (i, r) in c.rows.iter().enumerate() {
         let dir = match r.1[cd].to_ascii_lowercase().as_str() {
             "up" | "+" | "pos" | "positive" => Direction::Up,
@@ -265,7 +280,9 @@ pub fn readings_from_csv(source_name: &str, text: &str) -> Result<Vec<Reading>> 
         };
         let run = r.1[cr]
             .parse::<usize>()
-            .map_err(|_| MetrologyError::Parse {
+            .ok()
+            .filter(|&n| n > 0)
+            .ok_or_else(|| MetrologyError::Parse {
                 source_name: source_name.into(),
                 line: r.0,
                 what: format!(
@@ -273,11 +290,34 @@ pub fn readings_from_csv(source_name: &str, text: &str) -> Result<Vec<Reading>> 
                     r.1[cr]
                 ),
             })?;
+        let target_mm = c.number_within(
+            i,
+            ct,
+            MAX_TARGET_MM,
+            "a target 100 m or more from the origin is not a machine-tool axis position (mm)",
+        )?;
+        let deviation_um = c.number_within(
+            i,
+            cx,
+            MAX_DEVIATION_UM,
+            "a deviation of 1 m (10^6 µm) or more is not a measured positioning error; is the column in µm?",
+        )?;
+        let key = ((target_mm * 1e6).round() as i64, run, dir);
+        if let Some(first) = seen.insert(key, r.0) {
+            return Err(MetrologyError::Parse {
+                source_name: source_name.into(),
+                line: r.0,
+                what: format!(
+                    "duplicate reading: target {target_mm} mm, run {run}, direction {} already on line {first}",
+                    if dir == Direction::Up { "up" } else { "down" }
+                ),
+            });
+        }
         out.push(Reading {
-            target_mm: c.number(i, ct)?,
+            target_mm,
             run,
             direction: dir,
-            deviation_um: c.number(i, cx)?,
+            deviation_um,
         });
     }
     Ok(out)

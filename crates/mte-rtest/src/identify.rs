@@ -473,6 +473,32 @@ pub fn identify(m: &Machine, data: &Dataset, spec: &FitSpec) -> Result<Fit> {
             c.describe()
         ));
     }
+    // A location error beyond these is not a machine's: the design cannot separate it from
+    // the others even when the rank test passed (e.g. one test of one setup).
+    let implausible: Vec<String> = estimates
+        .iter()
+        .filter_map(|e| {
+            let ParamKind::Slot(s) = &e.kind else {
+                return None;
+            };
+            let (limit, unit) = if s.angular {
+                (PLAUSIBLE_ANGLE_RAD, "rad")
+            } else {
+                (PLAUSIBLE_LENGTH_MM, "mm")
+            };
+            let u = e.std_uncertainty.unwrap_or(0.0);
+            (!(e.value.abs() <= limit && u <= limit))
+                .then(|| format!("{} = {:.3e} ± {:.3e} {unit}", e.label, e.value, u))
+        })
+        .collect();
+    if !implausible.is_empty() {
+        warnings.push(format!(
+            "the design cannot separate these parameters: {} (beyond any machine's location error, |angle| ≤ {PLAUSIBLE_ANGLE_RAD} rad, |offset| ≤ {PLAUSIBLE_LENGTH_MM} mm); these data ({} readings, {} setup(s)) do not determine them: measure more tests or setups, or fit fewer parameters",
+            implausible.join(", "),
+            data.readings.len(),
+            n_set
+        ));
+    }
     let _ = vs_inv;
     Ok(Fit {
         estimates,
@@ -492,6 +518,13 @@ pub fn identify(m: &Machine, data: &Dataset, spec: &FitSpec) -> Result<Fit> {
         warnings,
     })
 }
+
+/// Largest plausible rotary-axis location angle error (or its uncertainty), rad: 0.01 rad ≈
+/// 0.57°, far beyond any machine's misalignment. Larger estimates are reported as a design
+/// that cannot separate the parameters.
+pub const PLAUSIBLE_ANGLE_RAD: f64 = 0.01;
+/// Largest plausible location offset error (or its uncertainty), mm.
+pub const PLAUSIBLE_LENGTH_MM: f64 = 10.0;
 
 /// A value and its standard uncertainty (None when unobservable).
 pub type ValueU = (f64, Option<f64>);

@@ -13,6 +13,18 @@ use std::path::Path;
 /// Format tag of the manifest.
 pub const FORMAT: &str = "mte-rtest/1";
 
+/// Largest |coordinate| (ball, nest, linear axis) the reader accepts, mm (exclusive): 1 km.
+pub const MAX_COORDINATE_MM: f64 = 1e6;
+/// Largest |rotary axis angle| the reader accepts, degrees (exclusive).
+pub const MAX_ANGLE_DEG: f64 = 1e5;
+/// Largest |time| the reader accepts, s (exclusive): about 30 years.
+pub const MAX_TIME_S: f64 = 1e9;
+/// Largest |sensor reading| the reader accepts, µm (exclusive): 100 mm, far beyond any
+/// R-test sensor's range.
+pub const MAX_READING_UM: f64 = 1e5;
+const READING_MEANING: &str =
+    "a ball-to-nest displacement of 100 mm or more is not an R-test reading (µm)";
+
 /// One setup as written in the manifest (angles in degrees).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -72,7 +84,9 @@ fn axis_unit(name: &str, rotary: bool) -> String {
 /// columns are `<axis>_deg`, the others `<axis>_mm`).
 ///
 /// # Errors
-/// [`RtestError::Invalid`] naming the manifest field or the CSV line and column.
+/// [`RtestError::Invalid`] naming the manifest field or the CSV line and column: numbers out
+/// of range ([`MAX_COORDINATE_MM`], [`MAX_ANGLE_DEG`], [`MAX_TIME_S`], [`MAX_READING_UM`]),
+/// duplicate axes or setup ids (naming both), a reading repeated (naming both lines).
 pub fn dataset_from_str(
     manifest_name: &str,
     manifest: &str,
@@ -110,6 +124,61 @@ pub fn dataset_from_str(
             })
             .collect()
     };
+    let bad = |field: String, message: String| RtestError::Invalid { field, message };
+    for (i, a) in man.axes.iter().enumerate() {
+        if let Some(j) = man.axes[..i].iter().position(|b| b == a) {
+            return Err(bad(
+                format!("{manifest_name}: axes[{i}]"),
+                format!("axis `{a}` appears twice (axes[{j}] and axes[{i}])"),
+            ));
+        }
+    }
+    for (i, s) in man.setups.iter().enumerate() {
+        if let Some(j) = man.setups[..i].iter().position(|o| o.id == s.id) {
+            return Err(bad(
+                format!("{manifest_name}: setups[{i}].id"),
+                format!(
+                    "setup id `{}` appears twice (setups[{j}] and setups[{i}])",
+                    s.id
+                ),
+            ));
+        }
+        for (name, v) in [("ball_mm", s.ball_mm), ("nest_mm", s.nest_mm)] {
+            if let Some(x) = v.iter().find(|x| x.abs() >= MAX_COORDINATE_MM) {
+                return Err(bad(
+                    format!("{manifest_name}: setups[{i}].{name}"),
+                    format!(
+                        "{x:e} mm is out of range (|value| < 1e6 mm): a ball or nest 1 km away is not an R-test setup"
+                    ),
+                ));
+            }
+        }
+        for (a, v) in &s.centring {
+            let limit = if rotary(a) {
+                MAX_ANGLE_DEG
+            } else {
+                MAX_COORDINATE_MM
+            };
+            if v.abs() >= limit {
+                return Err(bad(
+                    format!("{manifest_name}: setups[{i}].centring.{a}"),
+                    format!(
+                        "{v:e} is out of range (|value| < {limit:e} {})",
+                        if rotary(a) { "deg" } else { "mm" }
+                    ),
+                ));
+            }
+        }
+        if s.centring_t_s.abs() >= MAX_TIME_S {
+            return Err(bad(
+                format!("{manifest_name}: setups[{i}].centring_t_s"),
+                format!(
+                    "{:e} s is out of range (|value| < 1e9 s, 30 years)",
+                    s.centring_t_s
+                ),
+            ));
+        }
+    }
     let mut setups = Vec::new();
     for (i, s) in man.setups.iter().enumerate() {
         setups.push(Setup {
@@ -138,7 +207,20 @@ pub fn dataset_from_str(
         table.require("dz_um")?,
     ];
     let mut readings = Vec::new();
+    let mut seen: std::collections::HashMap<Vec<&str>, usize> = std::collections::HashMap::new();
     for r in 0..table.len() {
+        let mut key: Vec<&str> = vec![
+            table.text(r, c_setup),
+            table.text(r, c_test),
+            table.text(r, c_t),
+        ];
+        key.extend(c_axes.iter().map(|&c| table.text(r, c)));
+        if let Some(first) = seen.insert(key, table.line(r)) {
+            return Err(bad(
+                format!("{csv_name} line {}", table.line(r)),
+                format!("the same reading (setup, test, time and axes) as line {first}"),
+            ));
+        }
         let sid = table.text(r, c_setup);
         let setup = setups
             .iter()
@@ -152,19 +234,39 @@ pub fn dataset_from_str(
             .iter()
             .zip(&c_axes)
             .map(|(a, &c)| {
-                let v = table.number(r, c)?;
-                Ok(if rotary(a) { v.to_radians() } else { v })
+                Ok(if rotary(a) {
+                    table
+                        .number_within(
+                            r,
+                            c,
+                            MAX_ANGLE_DEG,
+                            "an axis angle of 10^5 degrees or more is not a command",
+                        )?
+                        .to_radians()
+                } else {
+                    table.number_within(
+                        r,
+                        c,
+                        MAX_COORDINATE_MM,
+                        "an axis 1 km or more from its origin is not a command (mm)",
+                    )?
+                })
             })
             .collect::<Result<Vec<f64>>>()?;
         readings.push(Reading {
             setup,
             test: table.text(r, c_test).to_string(),
-            t_s: table.number(r, c_t)?,
+            t_s: table.number_within(
+                r,
+                c_t,
+                MAX_TIME_S,
+                "a time of 10^9 s (30 years) or more is not a reading time",
+            )?,
             q,
             d_mm: Vec3::new(
-                table.number(r, c_d[0])? * 1e-3,
-                table.number(r, c_d[1])? * 1e-3,
-                table.number(r, c_d[2])? * 1e-3,
+                table.number_within(r, c_d[0], MAX_READING_UM, READING_MEANING)? * 1e-3,
+                table.number_within(r, c_d[1], MAX_READING_UM, READING_MEANING)? * 1e-3,
+                table.number_within(r, c_d[2], MAX_READING_UM, READING_MEANING)? * 1e-3,
             ),
         });
     }
@@ -183,7 +285,7 @@ pub fn dataset_from_str(
 /// [`RtestError::Io`] for unreadable files, else as [`dataset_from_str`].
 pub fn read_dataset(manifest_path: &Path, rotary: &dyn Fn(&str) -> bool) -> Result<Dataset> {
     let read = |p: &Path| {
-        std::fs::read_to_string(p).map_err(|e| RtestError::Io {
+        mte_linalg::text::read_text(p).map_err(|e| RtestError::Io {
             path: p.display().to_string(),
             message: e.to_string(),
         })

@@ -8,6 +8,9 @@ use rand::Rng;
 use serde::{Deserialize, Serialize};
 use serde_json::Value;
 
+/// Largest |parameter| (mean, sd, bound) of a distribution: beyond it the variance overflows.
+pub const MAX_PARAMETER: f64 = 1e100;
+
 /// Names accepted for `"dist"` in problem files.
 pub const DISTRIBUTION_NAMES: &str = "\"normal\", \"uniform\", \"truncated_normal\", \"tolerance\" (normal with mean 0 from a ± tolerance and its coverage)";
 
@@ -111,7 +114,8 @@ impl Distribution {
         })
     }
 
-    /// Checks the parameters; `input` names the input in the error.
+    /// Checks the parameters; `input` names the input in the error. Parameters must be finite
+    /// and within ±[`MAX_PARAMETER`] (so that variances stay finite).
     ///
     /// # Errors
     /// [`Error::InvalidInput`] naming the field.
@@ -123,6 +127,24 @@ impl Distribution {
                 message,
             })
         };
+        let params: Vec<(&str, f64)> = match *self {
+            Distribution::Normal { mean, sd } => vec![("mean", mean), ("sd", sd)],
+            Distribution::Uniform { lo, hi } => vec![("lo", lo), ("hi", hi)],
+            // infinite bounds are allowed (a half-truncated normal)
+            Distribution::TruncatedNormal { mean, sd, lo, hi } => {
+                vec![("mean", mean), ("sd", sd), ("lo", lo), ("hi", hi)]
+            }
+        };
+        for (field, v) in params {
+            if v.is_finite() && v.abs() > MAX_PARAMETER {
+                return bad(
+                    field,
+                    format!(
+                        "{v:e} is beyond ±{MAX_PARAMETER:e}: its square (the variance) overflows; check the unit"
+                    ),
+                );
+            }
+        }
         match *self {
             Distribution::Normal { mean, sd } => {
                 if !mean.is_finite() {
@@ -362,8 +384,18 @@ impl Problem {
                 got: 0,
             });
         }
-        for inp in &inputs {
+        for (i, inp) in inputs.iter().enumerate() {
             inp.dist.validate(&inp.name)?;
+            if let Some(j) = inputs[..i].iter().position(|o| o.name == inp.name) {
+                return Err(Error::InvalidInput {
+                    input: format!("{} (inputs[{i}])", inp.name),
+                    field: "name".into(),
+                    message: format!(
+                        "the name `{}` is already used by inputs[{j}]; every input needs its own name",
+                        inp.name
+                    ),
+                });
+            }
         }
         Ok(Problem { inputs, chol: None })
     }
@@ -664,6 +696,30 @@ fn input_from_json(v: &Value, index: usize) -> Result<Input> {
             });
         }
     };
+    if let Some(o) = v.as_object() {
+        const KNOWN: [&str; 8] = [
+            "name",
+            "dist",
+            "mean",
+            "sd",
+            "lo",
+            "hi",
+            "half_width",
+            "coverage",
+        ];
+        if let Some(k) = o.keys().find(|k| !KNOWN.contains(&k.as_str())) {
+            return Err(Error::InvalidInput {
+                input: label,
+                field: k.clone(),
+                message: format!("unknown field; expected {}", KNOWN.join(", ")),
+            });
+        }
+    } else {
+        return Err(Error::Json {
+            context: format!("inputs[{index}]"),
+            message: "must be an object {\"name\": …, \"dist\": …}".into(),
+        });
+    }
     dist.validate(&label)?;
     Ok(Input { name, dist })
 }

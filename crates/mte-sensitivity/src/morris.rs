@@ -30,7 +30,7 @@ pub enum MorrisDesign {
 
 /// Settings of a Morris screening.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(default)]
+#[serde(default, deny_unknown_fields)]
 pub struct MorrisParams {
     /// Number of trajectories r.
     pub r: usize,

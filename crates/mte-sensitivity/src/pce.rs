@@ -70,7 +70,7 @@ pub enum Selection {
 
 /// Settings of a sparse PCE.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(default)]
+#[serde(default, deny_unknown_fields)]
 pub struct PceParams {
     /// Largest total degree p.
     pub degree: usize,

@@ -22,7 +22,7 @@ use serde::{Deserialize, Serialize};
 
 /// Settings of a Sobol' analysis.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(default)]
+#[serde(default, deny_unknown_fields)]
 pub struct SobolParams {
     /// Base sample size N (model runs N(k + 2)). Powers of two suit the Sobol' design best.
     pub n: usize,

@@ -1,6 +1,9 @@
 #![doc = include_str!("../README.md")]
 
+pub mod limits;
+pub mod output;
 pub mod plot;
+pub mod problem;
 pub mod report;
 
 /// Everything that can go wrong in a command: the message names the file, line or field.

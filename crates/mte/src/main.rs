@@ -11,6 +11,10 @@ mod cmd;
 struct Cli {
     #[command(subcommand)]
     command: Command,
+    /// Memory limit (GB) of a command that allocates in proportion to a number you give
+    /// (--n, --trials, a Sobol' N, a PCE degree); default 4, or MTE_MAX_MEMORY_GB.
+    #[arg(long, global = true, value_name = "GB")]
+    max_memory_gb: Option<f64>,
 }
 
 #[derive(Subcommand)]
@@ -34,6 +38,12 @@ enum Command {
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
+    if let Some(gb) = cli.max_memory_gb
+        && let Err(err) = mte::limits::set_max_memory_gb(gb)
+    {
+        eprintln!("error: {err}");
+        return ExitCode::FAILURE;
+    }
     let result: Result<(), mte::CliError> = match cli.command {
         Command::Machine(args) => cmd::machine::run(&args),
         Command::Tracker(args) => cmd::tracker::run(&args),

@@ -622,10 +622,30 @@ fn ranges<'a>(
     (pad(xr), pad(yr))
 }
 
-fn pad((lo, hi): (f64, f64)) -> (f64, f64) {
-    if !lo.is_finite() || !hi.is_finite() {
+/// An axis range a chart can draw: finite ends within ±1e100 and `lo ≤ hi`; non-finite or
+/// reversed ends give (0, 1). Plot-axis tick computations loop forever or panic on infinite
+/// spans, so every range goes through here.
+///
+/// ```
+/// use mte::plot::finite_range;
+/// assert_eq!(finite_range(-2.0, 3.0), (-2.0, 3.0));
+/// assert_eq!(finite_range(f64::NEG_INFINITY, f64::INFINITY), (0.0, 1.0));
+/// assert_eq!(finite_range(f64::NAN, 1.0), (0.0, 1.0));
+/// assert_eq!(finite_range(-1e300, 1e300), (-1e100, 1e100));
+/// ```
+pub fn finite_range(lo: f64, hi: f64) -> (f64, f64) {
+    const BIG: f64 = 1e100;
+    if !(lo.is_finite() && hi.is_finite()) || lo > hi {
         return (0.0, 1.0);
     }
+    (lo.clamp(-BIG, BIG), hi.clamp(-BIG, BIG))
+}
+
+fn pad((lo, hi): (f64, f64)) -> (f64, f64) {
+    if !lo.is_finite() || !hi.is_finite() || lo > hi {
+        return (0.0, 1.0);
+    }
+    let (lo, hi) = finite_range(lo, hi);
     let span = hi - lo;
     if span <= 0.0 {
         let d = if lo == 0.0 { 1.0 } else { lo.abs() * 0.1 };

@@ -293,14 +293,41 @@ pub fn write_json<T: serde::Serialize + ?Sized>(path: &Path, value: &T) -> Resul
 /// [`CliError::Io`] if the file cannot be read, [`CliError::Json`] (with line and column) if it
 /// does not parse into `T`.
 pub fn read_json<T: serde::de::DeserializeOwned>(path: &Path) -> Result<T, CliError> {
-    let text = std::fs::read_to_string(path).map_err(|source| CliError::Io {
-        path: path.to_path_buf(),
-        source,
-    })?;
+    let text = read_text(path)?;
     serde_json::from_str(&text).map_err(|source| CliError::Json {
         path: path.to_path_buf(),
         source,
     })
+}
+
+/// Reads a user's text file with [`mte_linalg::text::read_text`]: regular files only (a FIFO
+/// would block), a UTF-8 byte-order mark dropped.
+///
+/// # Errors
+/// [`CliError::Io`] naming the file.
+pub fn read_text(path: &Path) -> Result<String, CliError> {
+    mte_linalg::text::read_text(path).map_err(|source| CliError::Io {
+        path: path.to_path_buf(),
+        source,
+    })
+}
+
+/// Refuses a path that exists but is not a regular file (a FIFO or device would block the
+/// reader that opens it). A missing path passes: its reader reports it.
+///
+/// # Errors
+/// [`CliError::Io`] naming the file.
+pub fn check_regular_file(path: &Path) -> Result<(), CliError> {
+    match std::fs::metadata(path) {
+        Ok(m) if !m.is_file() => Err(CliError::Io {
+            path: path.to_path_buf(),
+            source: std::io::Error::new(
+                std::io::ErrorKind::InvalidInput,
+                "not a regular file (a directory, FIFO or device cannot be read as data)",
+            ),
+        }),
+        _ => Ok(()),
+    }
 }
 
 /// Writes text (Markdown, SVG, CSV) to `path`, creating parent directories.

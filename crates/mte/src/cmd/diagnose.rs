@@ -29,6 +29,8 @@ pub struct Args {
 
 /// Runs the diagnosis and writes the report.
 pub fn run(args: &Args) -> Result<(), CliError> {
+    let mut out = mte::output::OutDir::prepare(&args.out)?;
+    mte::report::check_regular_file(&args.manifest)?;
     let prepared = load_with_noise(&args.manifest, args.noise_um)
         .map_err(|e| CliError::Library(e.to_string()))?;
     let params = DiagnoseParams {
@@ -44,23 +46,17 @@ pub fn run(args: &Args) -> Result<(), CliError> {
     )
     .map_err(|e| CliError::Library(e.to_string()))?;
     let markdown = report::markdown(&diagnosis, &prepared.title);
-    let io = |path: PathBuf| move |source| CliError::Io { path, source };
-    std::fs::create_dir_all(&args.out).map_err(io(args.out.clone()))?;
     let md_path = args.out.join("report.md");
-    std::fs::write(&md_path, &markdown).map_err(io(md_path.clone()))?;
+    out.add("report.md", markdown.clone());
     let json_path = args.out.join("diagnosis.json");
-    let json =
-        serde_json::to_string_pretty(&diagnosis).map_err(|e| CliError::Library(e.to_string()))?;
-    std::fs::write(&json_path, json).map_err(io(json_path.clone()))?;
+    out.add_json("diagnosis.json", &diagnosis)?;
     let mut plots = Vec::new();
     for (k, series) in diagnosis.residual_series.iter().enumerate() {
-        let path = args
-            .out
-            .join(format!("residuals-{}-{}.svg", k + 1, series.variable));
-        let svg = residual_svg(&diagnosis, k);
-        std::fs::write(&path, svg).map_err(io(path.clone()))?;
-        plots.push(path);
+        let name = format!("residuals-{}-{}.svg", k + 1, series.variable);
+        out.add(name.clone(), residual_svg(&diagnosis, k));
+        plots.push(args.out.join(name));
     }
+    out.commit()?;
     // The verdict first: what an engineer reads in a minute.
     let verdict: String = markdown
         .split("## Base model")

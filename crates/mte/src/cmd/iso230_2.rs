@@ -4,6 +4,8 @@ use std::fmt::Write;
 use std::path::PathBuf;
 
 use mte::CliError;
+use mte::output::OutDir;
+use mte::report::read_text;
 use mte_metrology::iso230_2::{AxisResult, evaluate, readings_from_csv};
 use plotters::prelude::*;
 
@@ -75,6 +77,7 @@ fn svg(a: &AxisResult) -> String {
             .iter()
             .map(|t| (t.mean_up_um + 2.0 * t.s_up_um).max(t.mean_down_um + 2.0 * t.s_down_um))
             .fold(f64::MIN, f64::max);
+        let (lo, hi) = mte::plot::finite_range(lo, hi);
         let pad = 0.1 * (hi - lo).max(1e-3);
         if let Ok(mut c) = ChartBuilder::on(&root)
             .caption(
@@ -84,7 +87,13 @@ fn svg(a: &AxisResult) -> String {
             .margin(10)
             .x_label_area_size(35)
             .y_label_area_size(55)
-            .build_cartesian_2d(x0..x1.max(x0 + 1e-9), (lo - pad)..(hi + pad))
+            .build_cartesian_2d(
+                {
+                    let (x0, x1) = mte::plot::finite_range(x0, x1);
+                    x0..x1.max(x0 + 1e-9)
+                },
+                (lo - pad)..(hi + pad),
+            )
         {
             let _ = c
                 .configure_mesh()
@@ -116,27 +125,16 @@ fn svg(a: &AxisResult) -> String {
 
 /// Runs `mte iso230-2`.
 pub fn run(args: &Args) -> Result<(), CliError> {
-    let text = std::fs::read_to_string(&args.runs).map_err(|source| CliError::Io {
-        path: args.runs.clone(),
-        source,
-    })?;
+    let mut out = OutDir::prepare(&args.out)?;
+    let text = read_text(&args.runs)?;
     let r = readings_from_csv(&args.runs.display().to_string(), &text)
         .map_err(|e| CliError::Library(e.to_string()))?;
     let a = evaluate(&r).map_err(|e| CliError::Library(e.to_string()))?;
-    let io = |path: PathBuf| move |source| CliError::Io { path, source };
-    std::fs::create_dir_all(&args.out).map_err(io(args.out.clone()))?;
     let md = markdown(&a);
-    for (name, content) in [
-        ("report.md", md.clone()),
-        (
-            "iso230-2.json",
-            serde_json::to_string_pretty(&a).map_err(|e| CliError::Library(e.to_string()))?,
-        ),
-        ("iso230-2.svg", svg(&a)),
-    ] {
-        let p = args.out.join(name);
-        std::fs::write(&p, content).map_err(io(p.clone()))?;
-    }
+    out.add("report.md", md.clone());
+    out.add_json("iso230-2.json", &a)?;
+    out.add("iso230-2.svg", svg(&a));
+    out.commit()?;
     println!("{}", md.lines().take(16).collect::<Vec<_>>().join("\n"));
     Ok(())
 }

@@ -49,6 +49,9 @@ pub fn run(args: &Args) -> Result<(), CliError> {
 /// A library name or a file path ([`Machine::library_or_file`]); an unknown name is a usage
 /// error.
 pub fn load(name_or_file: &str) -> Result<Machine, CliError> {
+    if !Machine::library_names().contains(&name_or_file) {
+        mte::report::check_regular_file(Path::new(name_or_file))?;
+    }
     Machine::library_or_file(name_or_file, Path::new("")).map_err(|e| match e {
         KinError::NoSuchMachine { .. } => CliError::Usage(e.to_string()),
         e => CliError::Library(e.to_string()),

@@ -4,7 +4,9 @@ use std::fmt::Write;
 use std::path::{Path, PathBuf};
 
 use mte::CliError;
+use mte::output::OutDir;
 use mte::plot::{Axis, Series, XyChart};
+use mte::report::read_text;
 use mte_kinematics::Machine;
 use mte_linalg::Vec3;
 use mte_rtest::io::{dataset_to_strings, read_dataset};
@@ -60,6 +62,9 @@ enum Sub {
         /// Extra parameters by ISO name (comma separated), e.g. "EA0Y".
         #[arg(long, default_value = "")]
         params: String,
+        /// Accept setups centred outside an axis's stroke (an error otherwise).
+        #[arg(long)]
+        allow_outside_stroke: bool,
         /// Output folder.
         #[arg(long, default_value = "out/rtest-identify")]
         out: PathBuf,
@@ -130,25 +135,12 @@ fn rotary(m: &Machine) -> impl Fn(&str) -> bool + '_ {
     }
 }
 
-fn write(path: &Path, text: &str) -> Result<(), CliError> {
-    if let Some(p) = path.parent() {
-        std::fs::create_dir_all(p).map_err(|e| CliError::Io {
-            path: p.to_path_buf(),
-            source: e,
-        })?;
-    }
-    std::fs::write(path, text).map_err(|e| CliError::Io {
-        path: path.to_path_buf(),
-        source: e,
-    })
-}
-
 /// SVG traces per (setup, test): dx, dy, dz (µm) against the rotary angle with the largest travel.
 fn traces(
     m: &Machine,
     ds: &Dataset,
     model: Option<&[Vec3]>,
-    out: &Path,
+    out: &mut OutDir,
 ) -> Result<Vec<String>, CliError> {
     let rot = rotary(m);
     let mut files = Vec::new();
@@ -195,7 +187,7 @@ fn traces(
             }
             let svg = chart.render()?;
             let f = format!("trace-{}-{}.svg", s.id.replace(['/', ' '], "_"), t);
-            write(&out.join(&f), &svg)?;
+            out.add(f.clone(), svg);
             files.push(f);
         }
     }
@@ -218,6 +210,35 @@ pub fn run(args: &Args) -> Result<(), CliError> {
             seed,
             out,
         } => {
+            let mut dir = OutDir::prepare(out)?;
+            if !(noise_um.is_finite() && *noise_um >= 0.0 && *noise_um < 1e4) {
+                return Err(CliError::Usage(format!(
+                    "--noise-um: expected a sensor noise in [0, 10 000) µm, got {noise_um}"
+                )));
+            }
+            if centring.len() > ball.len() {
+                return Err(CliError::Usage(format!(
+                    "--centring given {} times for {} --ball setup(s): one --centring per --ball, in order (`{}` has no setup)",
+                    centring.len(),
+                    ball.len(),
+                    centring[ball.len()]
+                )));
+            }
+            let test_names: Vec<&str> = tests
+                .split(',')
+                .map(str::trim)
+                .filter(|x| !x.is_empty())
+                .collect();
+            if test_names.is_empty() {
+                return Err(CliError::Usage(format!(
+                    "--tests: `{tests}` names no test; expected BK1, BK2 and/or BK4"
+                )));
+            }
+            for (i, t) in test_names.iter().enumerate() {
+                if test_names[..i].contains(t) {
+                    return Err(CliError::Usage(format!("--tests: `{t}` appears twice")));
+                }
+            }
             let m = super::machine::load(machine)?;
             let e = parse_errors(&m, errors)?;
             let mut plan = Vec::new();
@@ -228,14 +249,37 @@ pub fn run(args: &Args) -> Result<(), CliError> {
                     let (a, v) = c.split_once('=').ok_or_else(|| {
                         CliError::Usage(format!("--centring: `{c}` is not AXIS=deg"))
                     })?;
-                    let v: f64 = v.trim().parse().map_err(|_| {
-                        CliError::Usage(format!("--centring: `{v}` is not a number"))
+                    let v: f64 = v
+                        .trim()
+                        .parse()
+                        .ok()
+                        .filter(|v: &f64| v.is_finite())
+                        .ok_or_else(|| {
+                            CliError::Usage(format!("--centring: `{v}` is not a finite number"))
+                        })?;
+                    let k = m.axis_index(a.trim()).ok_or_else(|| {
+                        CliError::Usage(format!("--centring: unknown axis `{}` in `{c}`", a.trim()))
                     })?;
+                    let ax = &m.axes()[k];
+                    if !matches!(ax.kind, mte_kinematics::AxisKind::Rotary) {
+                        return Err(CliError::Usage(format!(
+                            "--centring: `{c}`: axis {} is not rotary",
+                            ax.name
+                        )));
+                    }
+                    let (lo, hi) = (ax.stroke.0.to_degrees(), ax.stroke.1.to_degrees());
+                    let tol = 1e-9 * (1.0 + lo.abs().max(hi.abs()));
+                    if v < lo - tol || v > hi + tol {
+                        return Err(CliError::Usage(format!(
+                            "--centring: `{c}`: {v} deg is outside the stroke [{lo}, {hi}] deg of axis {}",
+                            ax.name
+                        )));
+                    }
                     spec = spec.centred_at(a.trim(), v);
                     hold = Some((a.trim().to_string(), v));
                 }
                 let mut programs = Vec::new();
-                for t in tests.split(',').map(str::trim).filter(|x| !x.is_empty()) {
+                for &t in &test_names {
                     let mut p = match t {
                         "BK1" => Program::bk1(&m, None),
                         "BK2" => Program::bk2(&m),
@@ -271,9 +315,10 @@ pub fn run(args: &Args) -> Result<(), CliError> {
                 "R-test (simulated)",
                 &rotary(&m),
             );
-            write(&out.join("manifest.json"), &man)?;
-            write(&out.join("readings.csv"), &csv)?;
-            let files = traces(&m, &sim.dataset, None, out)?;
+            dir.add("manifest.json", man);
+            dir.add("readings.csv", csv);
+            let files = traces(&m, &sim.dataset, None, &mut dir)?;
+            dir.commit()?;
             println!(
                 "wrote {} readings to {} (manifest.json, readings.csv, {} SVG traces)",
                 sim.dataset.readings.len(),
@@ -286,20 +331,48 @@ pub fn run(args: &Args) -> Result<(), CliError> {
             manifest,
             squareness,
             params,
+            allow_outside_stroke,
             out,
         } => {
-            let text = std::fs::read_to_string(manifest).map_err(|e| CliError::Io {
-                path: manifest.clone(),
-                source: e,
-            })?;
+            let mut outdir = OutDir::prepare(out)?;
+            let text = read_text(manifest)?;
             let v: serde_json::Value = serde_json::from_str(&text)
                 .map_err(|e| CliError::Library(format!("{}: {e}", manifest.display())))?;
             let mname = v.get("machine").and_then(|x| x.as_str()).ok_or_else(|| {
                 CliError::Library(format!("{}: missing field `machine`", manifest.display()))
             })?;
             let dir = manifest.parent().unwrap_or(Path::new("."));
+            if !Machine::library_names().contains(&mname) {
+                mte::report::check_regular_file(&dir.join(mname))?;
+            }
             let m = Machine::library_or_file(mname, dir).map_err(lib)?;
             let ds = read_dataset(manifest, &rotary(&m)).map_err(lib)?;
+            if !allow_outside_stroke {
+                for (i, s) in ds.setups.iter().enumerate() {
+                    for (name, v) in ds.axis_names.iter().zip(&s.centring_q) {
+                        let Some(k) = m.axis_index(name) else {
+                            continue;
+                        };
+                        let ax = &m.axes()[k];
+                        let (lo, hi) = ax.stroke;
+                        let tol = 1e-9 * (1.0 + lo.abs().max(hi.abs()));
+                        if *v < lo - tol || *v > hi + tol {
+                            let (f, unit) = if rotary(&m)(name) {
+                                (180.0 / std::f64::consts::PI, "deg")
+                            } else {
+                                (1.0, "mm")
+                            };
+                            return Err(CliError::Library(format!(
+                                "{}: setups[{i}].centring.{name}: {} {unit} is outside the stroke [{}, {}] {unit}; pass --allow-outside-stroke to identify anyway",
+                                manifest.display(),
+                                v * f,
+                                lo * f,
+                                hi * f
+                            )));
+                        }
+                    }
+                }
+            }
             let mut spec = FitSpec::pivots(&m).map_err(lib)?;
             if *squareness {
                 spec = spec.with_squareness(&m).map_err(lib)?;
@@ -317,7 +390,7 @@ pub fn run(args: &Args) -> Result<(), CliError> {
                 .zip(&fit.residuals)
                 .map(|(r, e)| r.d_mm - e)
                 .collect();
-            let files = traces(&m, &ds, Some(&pred), out)?;
+            let files = traces(&m, &ds, Some(&pred), &mut outdir)?;
             let mut md = String::new();
             let _ = writeln!(
                 md,
@@ -407,9 +480,12 @@ pub fn run(args: &Args) -> Result<(), CliError> {
             for f in &files {
                 let _ = writeln!(md, "![{f}]({f})");
             }
-            write(&out.join("report.md"), &md)?;
-            let json = serde_json::to_string_pretty(&fit).map_err(lib)?;
-            write(&out.join("fit.json"), &json)?;
+            outdir.add("report.md", md.clone());
+            outdir.add_json("fit.json", &fit)?;
+            outdir.commit()?;
+            for w in &fit.warnings {
+                eprintln!("warning: {w}");
+            }
             println!("{md}");
             Ok(())
         }

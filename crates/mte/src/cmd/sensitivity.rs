@@ -9,7 +9,9 @@
 use clap::{Args as ClapArgs, ValueEnum};
 use indicatif::{ProgressBar, ProgressDrawTarget};
 use mte::CliError;
+use mte::output::OutDir;
 use mte::plot::{Axis, Interval, error_bar_chart};
+use mte::report::read_text;
 use mte_errors::pose_model::{
     COMPONENTS, Linearisation, PoseErrorModel, PoseModelError, diagonal_points, generalised_index,
     point_from_mm_deg, points_from_csv,
@@ -50,6 +52,10 @@ pub struct Args {
     /// Output directory.
     #[arg(long, default_value = "sensitivity-out")]
     out: PathBuf,
+    /// Accept machine test points (`model.points`) outside an axis's stroke (an error
+    /// otherwise).
+    #[arg(long)]
+    allow_outside_stroke: bool,
 }
 
 fn lib(e: mte_sensitivity::Error, path: &std::path::Path) -> CliError {
@@ -224,10 +230,7 @@ fn parse_points(
                     dir.join(c.as_str().ok_or_else(|| {
                         field_err(path, &format!("{f}.csv"), "expected a file name")
                     })?);
-                let text = std::fs::read_to_string(&file).map_err(|source| CliError::Io {
-                    path: file.clone(),
-                    source,
-                })?;
+                let text = read_text(&file)?;
                 points_from_csv(m, &text, &file.display().to_string())
                     .map_err(|e| field_err(path, &format!("{f}.csv"), e))
             } else if let Some(n) = o.get("diagonals") {
@@ -253,7 +256,12 @@ fn parse_points(
 }
 
 /// The study of a problem file whose `model` is `{"name": "machine", …}`.
-fn machine_study(v: &Value, mv: &Value, path: &Path) -> Result<Study, CliError> {
+fn machine_study(
+    v: &Value,
+    mv: &Value,
+    path: &Path,
+    allow_outside_stroke: bool,
+) -> Result<Study, CliError> {
     for key in ["inputs", "correlation"] {
         if v.get(key).is_some() {
             return Err(field_err(
@@ -278,6 +286,7 @@ fn machine_study(v: &Value, mv: &Value, path: &Path) -> Result<Study, CliError> 
     let machine =
         super::machine::load(&machine_arg).map_err(|e| field_err(path, "model.machine", e))?;
     let errors_path = dir.join(text_of("errors")?);
+    mte::report::check_regular_file(&errors_path)?;
     let set = ErrorSet::from_file(&errors_path).map_err(|e| field_err(path, "model.errors", e))?;
     let mode = match mv.get("linearisation").map(|l| l.as_str()) {
         None | Some(Some("first_order")) => Linearisation::FirstOrder,
@@ -291,6 +300,32 @@ fn machine_study(v: &Value, mv: &Value, path: &Path) -> Result<Study, CliError> 
         }
     };
     let points = parse_points(mv.get("points"), &machine, dir, path)?;
+    if !allow_outside_stroke {
+        for (i, q) in points.iter().enumerate() {
+            for (a, v) in machine.axes().iter().zip(q) {
+                let (lo, hi) = a.stroke;
+                let tol = 1e-9 * (1.0 + lo.abs().max(hi.abs()));
+                if *v < lo - tol || *v > hi + tol {
+                    let (f, unit) = match a.kind {
+                        AxisKind::Linear => (1.0, "mm"),
+                        AxisKind::Rotary => (180.0 / std::f64::consts::PI, "deg"),
+                    };
+                    return Err(field_err(
+                        path,
+                        "model.points",
+                        format!(
+                            "point {} has {} = {} {unit}, outside the stroke [{}, {}] {unit}; pass --allow-outside-stroke to analyse it anyway",
+                            i + 1,
+                            a.name,
+                            v * f,
+                            lo * f,
+                            hi * f
+                        ),
+                    ));
+                }
+            }
+        }
+    }
     let catalogue = Catalogue::for_machine(&machine);
     let (problem, model) = PoseErrorModel::from_error_set(&machine, &catalogue, &set, points, mode)
         .map_err(|e| match e {
@@ -391,10 +426,10 @@ fn machine_study(v: &Value, mv: &Value, path: &Path) -> Result<Study, CliError> 
     })
 }
 
-fn study(v: &Value, path: &Path) -> Result<Study, CliError> {
+fn study(v: &Value, path: &Path, allow_outside_stroke: bool) -> Result<Study, CliError> {
     let mv = v.get("model").unwrap_or(&Value::Null);
     if mv.get("name").and_then(Value::as_str) == Some("machine") {
-        return machine_study(v, mv, path);
+        return machine_study(v, mv, path, allow_outside_stroke);
     }
     let problem = Problem::from_json(v).map_err(|e| lib(e, path))?;
     let model = build_model(mv, problem.dim(), path)?;
@@ -591,6 +626,16 @@ fn analyse(args: &Args, v: &Value, st: &Study, path: &Path) -> Result<Indices, C
     Ok(match args.method {
         Method::Sobol => {
             let p: mte_sensitivity::sobol::SobolParams = params(v, "sobol", path)?;
+            mte::limits::check_memory(
+                &format!(
+                    "{}: Sobol' with n = {} over {} inputs and {} outputs",
+                    path.display(),
+                    p.n,
+                    problem.dim(),
+                    model.n_outputs()
+                ),
+                sobol_bytes(&p, problem.dim(), model.n_outputs()),
+            )?;
             let total = (p.n * (problem.dim() + 2)) as u64;
             let bar = ProgressBar::new(total);
             if !std::io::stderr().is_terminal() {
@@ -630,6 +675,16 @@ fn analyse(args: &Args, v: &Value, st: &Study, path: &Path) -> Result<Indices, C
         }
         Method::Pce => {
             let p: mte_sensitivity::pce::PceParams = params(v, "pce", path)?;
+            mte::limits::check_memory(
+                &format!(
+                    "{}: PCE of degree {} over {} inputs with {} runs",
+                    path.display(),
+                    p.degree,
+                    problem.dim(),
+                    p.n_samples
+                ),
+                pce_bytes(&p, problem.dim(), model.n_outputs()),
+            )?;
             let r =
                 mte_sensitivity::pce::build_pce(&model, problem, &p).map_err(|e| lib(e, path))?;
             eprintln!("{}", pce_summary(&r));
@@ -655,6 +710,17 @@ fn analyse(args: &Args, v: &Value, st: &Study, path: &Path) -> Result<Indices, C
         }
         Method::Morris => {
             let p: mte_sensitivity::morris::MorrisParams = params(v, "morris", path)?;
+            let (k, m) = (problem.dim() as f64, model.n_outputs() as f64);
+            mte::limits::check_memory(
+                &format!(
+                    "{}: Morris with r = {} over {} inputs",
+                    path.display(),
+                    p.r,
+                    problem.dim()
+                ),
+                // every trajectory's k + 1 points, their model outputs and elementary effects
+                p.r as f64 * (k + 1.0) * (2.0 * k + m) * 8.0,
+            )?;
             let r =
                 mte_sensitivity::morris::morris(&model, problem, &p).map_err(|e| lib(e, path))?;
             let rows = r
@@ -732,29 +798,56 @@ fn header(labels: impl Iterator<Item = (String, bool)>) -> String {
         .collect()
 }
 
+/// Bytes a Sobol' analysis holds: the Latin-hypercube permutations (n × 2k × 4 bytes, the
+/// largest), each thread's block of model runs (inputs and outputs), and the per-block sums.
+fn sobol_bytes(p: &mte_sensitivity::sobol::SobolParams, k: usize, m: usize) -> f64 {
+    let (n, k, m) = (p.n as f64, k as f64, m as f64);
+    let runs_per_row = if p.second_order {
+        2.0 * k + 2.0
+    } else {
+        k + 2.0
+    };
+    let block = (n / 1024.0).ceil().max(64.0);
+    let threads = std::thread::available_parallelism().map_or(1, |t| t.get()) as f64;
+    let s_len = 4.0
+        + 2.0 * k
+        + if p.second_order {
+            k * (k - 1.0) / 2.0
+        } else {
+            0.0
+        };
+    n * 2.0 * k * 4.0 + threads * block * runs_per_row * (k + m) * 8.0 + 1024.0 * m * s_len * 8.0
+}
+
+/// Bytes a PCE holds: the candidate basis (total degree: C(k + p, p) terms, an upper bound for
+/// q < 1) evaluated at every run, twice (design and Gram work), and the runs themselves.
+fn pce_bytes(p: &mte_sensitivity::pce::PceParams, k: usize, m: usize) -> f64 {
+    let mut candidates = 1.0f64;
+    for i in 1..=p.degree {
+        candidates *= (k + i) as f64 / i as f64;
+    }
+    let n = p.n_samples as f64;
+    let validation = p.validation.map_or(0.0, |v| v.n as f64);
+    2.0 * 8.0 * n * candidates
+        + 8.0 * candidates * k as f64
+        + 8.0 * (n + validation) * (k + m) as f64
+}
+
 /// Runs the subcommand.
 ///
 /// # Errors
 /// Unreadable or invalid problem files (the message names the field), analysis errors, I/O errors.
 pub fn run(args: &Args) -> Result<(), CliError> {
+    let mut out = OutDir::prepare(&args.out)?;
     let path = &args.problem;
-    let text = std::fs::read_to_string(path).map_err(|source| CliError::Io {
-        path: path.clone(),
-        source,
-    })?;
-    let v: Value = serde_json::from_str(&text)
-        .map_err(|e| CliError::Library(format!("{}: line {}: {e}", path.display(), e.line())))?;
-    let st = study(&v, path)?;
+    let v = mte::problem::read_problem(path)?;
+    let st = study(&v, path, args.allow_outside_stroke)?;
     let names = st.problem.names();
     let mut ix = analyse(args, &v, &st, path)?;
     print_warnings(&ix.warnings);
-    std::fs::create_dir_all(&args.out).map_err(|source| CliError::Io {
-        path: args.out.clone(),
-        source,
-    })?;
-    let write = |name: &str, s: String| {
-        let p = args.out.join(name);
-        std::fs::write(&p, s).map_err(|source| CliError::Io { path: p, source })
+    let mut write = |name: &str, s: String| -> Result<(), CliError> {
+        out.add(name, s);
+        Ok(())
     };
     let Some(mo) = &st.machine else {
         if let Value::Object(o) = &mut ix.json {
@@ -789,6 +882,7 @@ pub fn run(args: &Args) -> Result<(), CliError> {
                 &bars(&names, vals, ci),
             )?,
         )?;
+        out.commit()?;
         println!(
             "wrote {}/result.json, indices.csv, indices.svg",
             args.out.display()
@@ -891,6 +985,7 @@ pub fn run(args: &Args) -> Result<(), CliError> {
         serde_json::to_string_pretty(&json).expect("json"),
     )?;
     write("aggregate.csv", agg_csv)?;
+    out.commit()?;
     if !mo.dropped.is_empty() {
         eprintln!(
             "left out {} outputs without variance: {}",

@@ -5,8 +5,9 @@ use std::fmt::Write;
 use std::path::{Path, PathBuf};
 
 use mte::CliError;
+use mte::output::OutDir;
 use mte::plot::{Axis, FieldMap, Series, XyChart, heat_arrow_map};
-use mte::report::{write_json, write_text};
+use mte::report::read_text;
 use mte_errors::volumetric::{
     Grid, Method, Point, VolumetricResult, poses_from_csv, program_from_csv, simulate,
 };
@@ -41,6 +42,10 @@ pub struct Args {
     /// Use the first-order model J(q)·e instead of the exact transforms.
     #[arg(long)]
     first_order: bool,
+    /// Accept grid bounds, `--at` values and program or pose points outside an axis's stroke
+    /// (an error otherwise).
+    #[arg(long)]
+    allow_outside_stroke: bool,
     /// Output directory.
     #[arg(long)]
     out: PathBuf,
@@ -48,13 +53,6 @@ pub struct Args {
 
 fn lib<E: std::fmt::Display>(e: E) -> CliError {
     CliError::Library(e.to_string())
-}
-
-fn read(p: &Path) -> Result<String, CliError> {
-    std::fs::read_to_string(p).map_err(|source| CliError::Io {
-        path: p.to_path_buf(),
-        source,
-    })
 }
 
 /// A library machine name or an mte-machine/1 file.
@@ -79,15 +77,48 @@ fn axis_of(m: &Machine, name: &str, what: &str) -> Result<usize, CliError> {
     })
 }
 
-fn parse_grid(
-    m: &Machine,
-    spec: Option<&str>,
-    at: Option<&str>,
-    n: usize,
-) -> Result<Grid, CliError> {
-    let mut g = Grid::over_strokes(m, n);
-    if let Some(spec) = spec {
+/// The stroke of axis `k` in the units users write (mm, deg).
+fn stroke_user(m: &Machine, k: usize) -> (f64, f64, &'static str) {
+    let a = &m.axes()[k];
+    if a.kind == AxisKind::Rotary {
+        (a.stroke.0.to_degrees(), a.stroke.1.to_degrees(), "deg")
+    } else {
+        (a.stroke.0, a.stroke.1, "mm")
+    }
+}
+
+/// `v` (internal units) lies in the stroke of axis `k`, up to rounding.
+fn in_stroke(m: &Machine, k: usize, v: f64) -> bool {
+    let (lo, hi) = m.axes()[k].stroke;
+    let tol = 1e-9 * (1.0 + lo.abs().max(hi.abs()));
+    v >= lo - tol && v <= hi + tol
+}
+
+fn outside_stroke(m: &Machine, k: usize, what: &str, v_user: f64) -> CliError {
+    let (lo, hi, unit) = stroke_user(m, k);
+    CliError::Usage(format!(
+        "{what}: {} = {v_user} {unit} is outside the stroke [{lo}, {hi}] {unit} of axis {}; pass --allow-outside-stroke to simulate it anyway",
+        m.axes()[k].name,
+        m.axes()[k].name
+    ))
+}
+
+/// Bytes `simulate` holds per point: the point, its errors, and its CSV row.
+fn bytes_per_point(m: &Machine) -> f64 {
+    300.0 + 16.0 * m.axes().len() as f64
+}
+
+fn parse_grid(m: &Machine, args: &Args) -> Result<Grid, CliError> {
+    let allow = args.allow_outside_stroke;
+    let mut g = Grid::over_strokes(m, args.n);
+    if args.n == 0 && args.grid.is_none() {
+        return Err(CliError::Usage(
+            "--n: needs at least 1 point per axis".into(),
+        ));
+    }
+    if let Some(spec) = args.grid.as_deref() {
         g.axes.clear();
+        let mut seen: Vec<(usize, String)> = Vec::new();
         for part in spec.split(',').filter(|s| !s.trim().is_empty()) {
             let bad = || CliError::Usage(format!("--grid: `{part}` is not AXIS=low:high:count"));
             let (name, rest) = part.trim().split_once('=').ok_or_else(bad)?;
@@ -96,57 +127,139 @@ fn parse_grid(
                 return Err(bad());
             }
             let k = axis_of(m, name.trim(), "--grid")?;
-            let lo: f64 = f[0].trim().parse().map_err(|_| bad())?;
-            let hi: f64 = f[1].trim().parse().map_err(|_| bad())?;
+            if let Some((_, first)) = seen.iter().find(|(j, _)| *j == k) {
+                return Err(CliError::Usage(format!(
+                    "--grid: axis {} appears twice (`{first}` and `{}`); give each axis once",
+                    m.axes()[k].name,
+                    part.trim()
+                )));
+            }
+            seen.push((k, part.trim().to_string()));
+            let num = |t: &str| -> Result<f64, CliError> {
+                match t.trim().parse::<f64>() {
+                    Ok(v) if v.is_finite() => Ok(v),
+                    _ => Err(CliError::Usage(format!(
+                        "--grid: `{part}`: `{}` is not a finite number",
+                        t.trim()
+                    ))),
+                }
+            };
+            let lo = num(f[0])?;
+            let hi = num(f[1])?;
             let cnt: usize = f[2].trim().parse().map_err(|_| bad())?;
-            g.axes.push((
-                m.axes()[k].name.clone(),
-                to_internal(m, k, lo),
-                to_internal(m, k, hi),
-                cnt,
-            ));
+            if cnt == 0 {
+                return Err(CliError::Usage(format!(
+                    "--grid: `{part}`: the count must be at least 1"
+                )));
+            }
+            if cnt > 1 && lo == hi {
+                return Err(CliError::Usage(format!(
+                    "--grid: `{part}`: {cnt} points between equal bounds are the same point; use a count of 1"
+                )));
+            }
+            let (lo_i, hi_i) = (to_internal(m, k, lo), to_internal(m, k, hi));
+            if !allow {
+                for (v, vi) in [(lo, lo_i), (hi, hi_i)] {
+                    if !in_stroke(m, k, vi) {
+                        return Err(outside_stroke(m, k, "--grid", v));
+                    }
+                }
+            }
+            g.axes.push((m.axes()[k].name.clone(), lo_i, hi_i, cnt));
+        }
+        if g.axes.is_empty() {
+            return Err(CliError::Usage(format!(
+                "--grid: `{spec}` names no axis; expected AXIS=low:high:count,…"
+            )));
         }
         let on_grid: Vec<String> = g.axes.iter().map(|a| a.0.clone()).collect();
         g.fixed.retain(|(a, _)| !on_grid.contains(a));
     }
-    if let Some(at) = at {
+    if let Some(at) = args.at.as_deref() {
+        let mut seen: Vec<usize> = Vec::new();
         for part in at.split(',').filter(|s| !s.trim().is_empty()) {
             let (name, v) = part
                 .trim()
                 .split_once('=')
                 .ok_or_else(|| CliError::Usage(format!("--at: `{part}` is not AXIS=value")))?;
             let k = axis_of(m, name.trim(), "--at")?;
-            let v: f64 = v
-                .trim()
-                .parse()
-                .map_err(|_| CliError::Usage(format!("--at: `{part}`: not a number")))?;
+            if seen.contains(&k) {
+                return Err(CliError::Usage(format!(
+                    "--at: axis {} appears twice",
+                    m.axes()[k].name
+                )));
+            }
+            seen.push(k);
+            if g.axes.iter().any(|a| a.0 == m.axes()[k].name) {
+                return Err(CliError::Usage(format!(
+                    "--at: axis {} is on the grid; an axis is either on the grid or held at a value",
+                    m.axes()[k].name
+                )));
+            }
+            let v: f64 = match v.trim().parse::<f64>() {
+                Ok(v) if v.is_finite() => v,
+                _ => {
+                    return Err(CliError::Usage(format!(
+                        "--at: `{part}`: not a finite number"
+                    )));
+                }
+            };
+            if !allow && !in_stroke(m, k, to_internal(m, k, v)) {
+                return Err(outside_stroke(m, k, "--at", v));
+            }
             g.fixed.retain(|(a, _)| a != &m.axes()[k].name);
             g.fixed
                 .push((m.axes()[k].name.clone(), to_internal(m, k, v)));
         }
     }
+    let total: f64 = g.axes.iter().map(|a| a.3 as f64).product();
+    mte::limits::check_memory(
+        &format!("a grid of {total:.0} points"),
+        total * bytes_per_point(m),
+    )?;
     Ok(g)
+}
+
+/// Points of a program or pose file outside the strokes are an error unless allowed.
+fn check_strokes(m: &Machine, points: &[Point], file: &Path) -> Result<(), CliError> {
+    for (i, p) in points.iter().enumerate() {
+        for (k, v) in p.q.iter().enumerate() {
+            if !in_stroke(m, k, *v) {
+                let (_, _, unit) = stroke_user(m, k);
+                let user = if unit == "deg" { v.to_degrees() } else { *v };
+                return Err(outside_stroke(
+                    m,
+                    k,
+                    &format!("{}: point {} (data row {})", file.display(), i, i + 1),
+                    user,
+                ));
+            }
+        }
+    }
+    Ok(())
 }
 
 /// Run `mte simulate`.
 pub fn run(args: &Args) -> Result<(), CliError> {
+    let mut out = OutDir::prepare(&args.out)?;
     let m = super::machine::load(&args.machine)?;
+    mte::report::check_regular_file(&args.errors)?;
     let set = ErrorSet::from_file(&args.errors).map_err(lib)?;
     let ev = Evaluator::new(&m, &set).map_err(lib)?;
     let (source, points, grid) = if let Some(p) = &args.program {
-        (
-            "program",
-            program_from_csv(&read(p)?, &p.display().to_string(), &m).map_err(lib)?,
-            None,
-        )
+        let pts = program_from_csv(&read_text(p)?, &p.display().to_string(), &m).map_err(lib)?;
+        if !args.allow_outside_stroke {
+            check_strokes(&m, &pts, p)?;
+        }
+        ("program", pts, None)
     } else if let Some(p) = &args.poses {
-        (
-            "poses",
-            poses_from_csv(&read(p)?, &p.display().to_string(), &m).map_err(lib)?,
-            None,
-        )
+        let pts = poses_from_csv(&read_text(p)?, &p.display().to_string(), &m).map_err(lib)?;
+        if !args.allow_outside_stroke {
+            check_strokes(&m, &pts, p)?;
+        }
+        ("poses", pts, None)
     } else {
-        let g = parse_grid(&m, args.grid.as_deref(), args.at.as_deref(), args.n)?;
+        let g = parse_grid(&m, args)?;
         ("grid", g.points(&m).map_err(lib)?, Some(g))
     };
     if points.is_empty() {
@@ -158,20 +271,18 @@ pub fn run(args: &Args) -> Result<(), CliError> {
         Method::Exact
     };
     let r = simulate(&ev, &points, method).map_err(lib)?;
-    std::fs::create_dir_all(&args.out).map_err(|source| CliError::Io {
-        path: args.out.clone(),
-        source,
-    })?;
-    write_text(&args.out.join("points.csv"), &points_csv(&m, &points, &r))?;
-    write_json(
-        &args.out.join("result.json"),
-        &result_json(&m, &set, source, method, &points, &r),
-    )?;
+    // The plot first: if it fails, nothing is written.
     let svg = match &grid {
         Some(g) if g.axes.iter().filter(|a| a.3 >= 2).count() >= 2 => grid_map(&m, g, &points, &r)?,
         _ => path_chart(&r)?,
     };
-    write_text(&args.out.join("map.svg"), &svg)?;
+    out.add("points.csv", points_csv(&m, &points, &r));
+    out.add_json(
+        "result.json",
+        &result_json(&m, &set, source, method, &points, &r),
+    )?;
+    out.add("map.svg", svg);
+    out.commit()?;
     let s = &r.summary;
     println!(
         "{}: {} points ({source}), max |position error| {:.2} µm at point {}, RMS {:.2} µm, ranges x/y/z {:.2}/{:.2}/{:.2} µm, max |orientation error| {:.2} µrad",

@@ -75,19 +75,11 @@ fn lib<E: std::fmt::Display>(e: E) -> CliError {
     CliError::Library(e.to_string())
 }
 
-fn read(p: &Path) -> Result<String, CliError> {
-    std::fs::read_to_string(p).map_err(|source| CliError::Io {
-        path: p.to_path_buf(),
-        source,
-    })
-}
+use mte::output::OutDir;
+use mte::report::read_text as read;
 
-fn write(p: &Path, s: &str) -> Result<(), CliError> {
-    std::fs::write(p, s).map_err(|source| CliError::Io {
-        path: p.to_path_buf(),
-        source,
-    })
-}
+/// Bytes the Monte Carlo holds per trial: the output value and its sorted copy.
+const BYTES_PER_TRIAL: f64 = 16.0;
 
 fn load(i: &Inputs) -> Result<Network, CliError> {
     let (s, t, l) = (read(&i.stations)?, read(&i.targets)?, read(&i.lengths)?);
@@ -234,36 +226,44 @@ fn svg_xy(a: &Adjustment) -> String {
     svg
 }
 
-fn write_adjustment(out: &Path, a: &Adjustment, extra: &str) -> Result<(), CliError> {
-    std::fs::create_dir_all(out).map_err(|source| CliError::Io {
-        path: out.to_path_buf(),
-        source,
-    })?;
+fn add_adjustment(out: &mut OutDir, a: &Adjustment, extra: &str) -> Result<String, CliError> {
     let md = markdown(a) + extra;
-    write(&out.join("report.md"), &md)?;
-    write(
-        &out.join("adjustment.json"),
-        &serde_json::to_string_pretty(a).map_err(lib)?,
-    )?;
-    write(&out.join("deviations-xy.svg"), &svg_xy(a))?;
+    out.add("report.md", md.clone());
+    out.add_json("adjustment.json", a)?;
+    out.add("deviations-xy.svg", svg_xy(a));
+    Ok(md)
+}
+
+fn print_adjustment(out: &Path, md: &str) {
     println!("{}", md.lines().take(6).collect::<Vec<_>>().join("\n"));
     println!("report: {}", out.join("report.md").display());
-    Ok(())
 }
 
 /// Runs `mte tracker …`.
 pub fn run(args: &Args) -> Result<(), CliError> {
     match &args.cmd {
         Sub::Adjust(i) => {
+            let mut out = OutDir::prepare(&i.out)?;
             let net = load(i)?;
             let a = adjust(&net, &AdjustParams::default()).map_err(lib)?;
-            write_adjustment(&i.out, &a, "")
+            let md = add_adjustment(&mut out, &a, "")?;
+            out.commit()?;
+            print_adjustment(&i.out, &md);
+            Ok(())
         }
         Sub::Uncertainty {
             inputs,
             trials,
             seed,
         } => {
+            let mut out = OutDir::prepare(&inputs.out)?;
+            if *trials == 0 {
+                return Err(CliError::Usage("--trials: at least 1 trial".into()));
+            }
+            mte::limits::check_memory(
+                &format!("--trials {trials}"),
+                *trials as f64 * BYTES_PER_TRIAL,
+            )?;
             let net = load(inputs)?;
             let a = adjust(&net, &AdjustParams::default()).map_err(lib)?;
             let f = LinearisedTracker::new(&a, TrackerQuantity::MaxDeviation).map_err(lib)?;
@@ -288,11 +288,10 @@ pub fn run(args: &Args) -> Result<(), CliError> {
                 r.symmetric_interval.0 * 1e3,
                 r.symmetric_interval.1 * 1e3
             );
-            write_adjustment(&inputs.out, &a, &extra)?;
-            write(
-                &inputs.out.join("uncertainty.json"),
-                &serde_json::to_string_pretty(&r).map_err(lib)?,
-            )?;
+            let md = add_adjustment(&mut out, &a, &extra)?;
+            out.add_json("uncertainty.json", &r)?;
+            out.commit()?;
+            print_adjustment(&inputs.out, &md);
             println!("{}", extra.trim());
             Ok(())
         }
@@ -313,9 +312,15 @@ pub fn run(args: &Args) -> Result<(), CliError> {
                     )));
                 }
             };
-            if !(edge_mm.is_finite() && *edge_mm > 0.0) {
+            let mut dir = OutDir::prepare(out)?;
+            if !(edge_mm.is_finite() && *edge_mm > 0.0 && *edge_mm < 1e5) {
                 return Err(CliError::Usage(format!(
-                    "--edge-mm must be > 0, got {edge_mm}"
+                    "--edge-mm: expected a cube edge in (0, 100 000) mm, got {edge_mm}"
+                )));
+            }
+            if !(field_um.is_finite() && *field_um >= 0.0 && *field_um < 1e4) {
+                return Err(CliError::Usage(format!(
+                    "--field-um: expected a maximum error in [0, 10 000) µm, got {field_um}"
                 )));
             }
             let targets = cube_edge_targets(*edge_mm, 2);
@@ -328,10 +333,6 @@ pub fn run(args: &Args) -> Result<(), CliError> {
                 *seed,
             )
             .map_err(lib)?;
-            std::fs::create_dir_all(out).map_err(|source| CliError::Io {
-                path: out.clone(),
-                source,
-            })?;
             let n = &sim.network;
             let mut s = String::from("id,x_mm,y_mm,z_mm,dead_path_mm,dead_path\n");
             for st in &n.stations {
@@ -341,7 +342,7 @@ pub fn run(args: &Args) -> Result<(), CliError> {
                     st.id, st.position_mm.x, st.position_mm.y, st.position_mm.z, st.dead_path_mm
                 );
             }
-            write(&out.join("stations.csv"), &s)?;
+            dir.add("stations.csv", s);
             let mut t = String::from("id,x_mm,y_mm,z_mm\n");
             let mut tr = String::from("id,x_true_mm,y_true_mm,z_true_mm\n");
             for (tg, p) in n.targets.iter().zip(&sim.true_targets) {
@@ -352,8 +353,8 @@ pub fn run(args: &Args) -> Result<(), CliError> {
                 );
                 let _ = writeln!(tr, "{},{:.9},{:.9},{:.9}", tg.id, p.x, p.y, p.z);
             }
-            write(&out.join("targets.csv"), &t)?;
-            write(&out.join("truth.csv"), &tr)?;
+            dir.add("targets.csv", t);
+            dir.add("truth.csv", tr);
             let mut l = String::from("station,target,length_mm,sigma_um\n");
             for o in &n.observations {
                 let _ = writeln!(
@@ -365,7 +366,8 @@ pub fn run(args: &Args) -> Result<(), CliError> {
                     o.sigma_mm * 1e3
                 );
             }
-            write(&out.join("lengths.csv"), &l)?;
+            dir.add("lengths.csv", l);
+            dir.commit()?;
             println!(
                 "wrote {}/{{stations,targets,lengths,truth}}.csv ({}, {} µm field, seed {seed})",
                 out.display(),
