@@ -53,7 +53,7 @@ pub enum DiagnoseError {
     },
     /// The candidates' designs would take more memory than allowed.
     #[error(
-        "{observations} observations × {columns} candidate columns need {needed_gb:.1} GB of memory, more than the limit of {limit_gb:.1} GB (DiagnoseParams::max_memory_gb; `mte diagnose --max-memory-gb`): thin the data (e.g. every k-th reading of a continuous log) or raise the limit"
+        "{observations} observations × {columns} candidate columns need {needed_gb:.1} GB of memory, more than the limit of {limit_gb:.1} GB (DiagnoseParams::max_memory_gb; `mte --max-memory-gb` or MTE_MAX_MEMORY_GB): thin the data (e.g. every k-th reading of a continuous log) or raise the limit"
     )]
     TooLarge {
         /// Observations.

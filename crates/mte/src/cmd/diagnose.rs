@@ -21,10 +21,6 @@ pub struct Args {
     /// Family-wise significance level of a discovery.
     #[arg(long, default_value_t = 1e-3)]
     pub alpha: f64,
-    /// Memory the candidates' designs may take, GB (a larger dataset is refused at once, with
-    /// the figure).
-    #[arg(long, default_value_t = 4.0)]
-    pub max_memory_gb: f64,
 }
 
 /// Runs the diagnosis and writes the report.
@@ -35,7 +31,7 @@ pub fn run(args: &Args) -> Result<(), CliError> {
         .map_err(|e| CliError::Library(e.to_string()))?;
     let params = DiagnoseParams {
         alpha: args.alpha,
-        max_memory_gb: args.max_memory_gb,
+        max_memory_gb: mte::limits::max_memory_gb()?,
         ..DiagnoseParams::default()
     };
     let diagnosis = diagnose(
