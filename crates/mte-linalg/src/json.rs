@@ -119,9 +119,9 @@ impl<'de, T: DeserializeOwned> Deserialize<'de> for Tagged<T> {
         };
         let external = Value::Object([(tag.clone(), Value::Object(map))].into_iter().collect());
         from_value(&external).map(Tagged).map_err(|e| {
-            // the path starts with the variant; an unknown variant is the `type` field's fault
+            // the path starts with the variant; at the root, the variant is unknown: `type`
             let path = match e.path.strip_prefix(tag.as_str()) {
-                _ if e.message.starts_with("unknown type") => "type",
+                _ if e.path.is_empty() => "type",
                 Some(rest) => rest.trim_start_matches('.'),
                 None => &e.path,
             };
@@ -192,7 +192,7 @@ fn reword(m: &str) -> (Option<String>, String) {
     if let Some(rest) = m.strip_prefix("missing field ") {
         return (names(rest).into_iter().next(), "missing field".into());
     }
-    for (what, kind) in [("unknown field ", "field"), ("unknown variant ", "type")] {
+    for (what, kind) in [("unknown field ", "field"), ("unknown variant ", "value")] {
         if let Some(rest) = m.strip_prefix(what) {
             let all = names(rest);
             let (given, known) = all.split_first().map_or(("", &[][..]), |(g, k)| (g, k));
