@@ -1,5 +1,22 @@
 //! Error sets: named error parameters with values or models, and distributions for sampling.
 //! JSON form `"format": "mte-errors/1"` (see `docs/formats.md`).
+//!
+//! The JSON form is read by serde (`mte_linalg::json`: unknown fields rejected, the path of the
+//! offending field in every message) after unit suffixes are moved out of the keys
+//! (`"value_um": 5` is read as the quantity `value` in µm), then converted to internal units with
+//! the kind (length or angle) and magnitude of every value checked.
+//!
+//! # Adding a JSON model
+//! 1. the model itself: an [`ErrorModel`] in `models/`;
+//! 2. here, one struct with its JSON fields (`#[derive(Deserialize)]`,
+//!    `#[serde(deny_unknown_fields)]`; a quantity with a unit suffix is a `Q<f64>` or
+//!    `Q<Vec<f64>>` field named without the suffix) and its `JsonModel` impl, which converts
+//!    the fields with `Cx` (`value`/`values` for error values, `position(s)` for axis
+//!    positions, `time`) and returns a [`ModelSpec`] — `ModelSpec::Custom(Arc::new(model))`
+//!    unless the model needs the axis' stroke;
+//! 3. one line `Name(NameJson)` in `json_models!`: the `"type"` is `name` in snake case.
+//!
+//! The list of types in messages and the dispatch follow from that line.
 
 use crate::csv::{CsvTable, UnitColumns};
 use crate::distribution::Distribution;
@@ -9,9 +26,13 @@ use crate::models::{
     ThermalLinear, ToleranceForm, ToleranceModel,
 };
 use crate::units::{Kind, Unit, split_suffix};
+use mte_linalg::json::{self, Tagged};
+use mte_linalg::text::read_text;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
+use serde::Deserialize;
+use serde::de::IgnoredAny;
 use serde_json::{Map, Value};
 use std::path::Path;
 use std::sync::Arc;
@@ -278,171 +299,6 @@ pub struct ErrorSet {
     pub entries: Vec<Entry>,
 }
 
-struct P<'a> {
-    src: &'a str,
-    dir: Option<&'a Path>,
-}
-
-impl P<'_> {
-    fn err(&self, field: impl Into<String>, message: impl Into<String>) -> Error {
-        Error::Json {
-            source_name: self.src.to_string(),
-            field: field.into(),
-            message: message.into(),
-        }
-    }
-    fn obj<'v>(&self, v: &'v Value, path: &str) -> Result<&'v Map<String, Value>> {
-        v.as_object()
-            .ok_or_else(|| self.err(path, format!("expected an object, found {}", type_name(v))))
-    }
-    fn check_keys(&self, m: &Map<String, Value>, path: &str, allowed: &[&str]) -> Result<()> {
-        for k in m.keys() {
-            let base = k.split_once("_per_").map(|(b, _)| b).unwrap_or(k);
-            let base = split_suffix(base).map(|(b, _)| b).unwrap_or(base);
-            let base = base
-                .strip_suffix("_s")
-                .or(base.strip_suffix("_min"))
-                .or(base.strip_suffix("_h"))
-                .unwrap_or(base);
-            if !allowed.contains(&k.as_str()) && !allowed.contains(&base) {
-                return Err(self.err(
-                    format!("{path}.{k}"),
-                    format!("unknown field; expected one of: {}", allowed.join(", ")),
-                ));
-            }
-        }
-        Ok(())
-    }
-    fn number(&self, v: &Value, path: &str) -> Result<f64> {
-        match v.as_f64() {
-            Some(x) if x.is_finite() => Ok(x),
-            _ => Err(self.err(
-                path,
-                format!("expected a finite number, found {}", type_name(v)),
-            )),
-        }
-    }
-    fn numbers(&self, v: &Value, path: &str) -> Result<Vec<f64>> {
-        let a = v.as_array().ok_or_else(|| {
-            self.err(
-                path,
-                format!("expected an array of numbers, found {}", type_name(v)),
-            )
-        })?;
-        a.iter()
-            .enumerate()
-            .map(|(i, x)| self.number(x, &format!("{path}[{i}]")))
-            .collect()
-    }
-    fn str<'v>(&self, m: &'v Map<String, Value>, path: &str, key: &str) -> Result<Option<&'v str>> {
-        match m.get(key) {
-            None => Ok(None),
-            Some(Value::String(s)) => Ok(Some(s)),
-            Some(v) => Err(self.err(
-                format!("{path}.{key}"),
-                format!("expected a string, found {}", type_name(v)),
-            )),
-        }
-    }
-    /// Find `base_<unit>` or `base` (+ `unit`): returns (value, unit, key).
-    fn quantity<'v>(
-        &self,
-        m: &'v Map<String, Value>,
-        path: &str,
-        base: &str,
-        default_unit: Option<(Unit, &str)>,
-    ) -> Result<Option<(&'v Value, Unit, String)>> {
-        let mut found: Option<(&Value, Unit, String)> = None;
-        for (k, v) in m {
-            let hit = if k == base {
-                match default_unit {
-                    Some((u, _)) => Some(u),
-                    None => {
-                        return Err(self.err(
-                            format!("{path}.{k}"),
-                            format!("no unit: write `{base}_um`, `{base}_urad`, … or give a `unit` field"),
-                        ));
-                    }
-                }
-            } else {
-                match split_suffix(k) {
-                    Some((b, u)) if b == base => Some(u),
-                    _ => None,
-                }
-            };
-            if let Some(u) = hit {
-                if let Some((_, _, prev)) = &found {
-                    return Err(self.err(
-                        format!("{path}.{k}"),
-                        format!("given twice (also `{prev}`)"),
-                    ));
-                }
-                found = Some((v, u, format!("{path}.{k}")));
-            }
-        }
-        Ok(found)
-    }
-    fn time(&self, m: &Map<String, Value>, path: &str, base: &str) -> Result<Option<f64>> {
-        let mut out = None;
-        for (suf, f) in [("s", 1.0), ("min", 60.0), ("h", 3600.0)] {
-            let k = format!("{base}_{suf}");
-            if let Some(v) = m.get(&k) {
-                if out.is_some() {
-                    return Err(self.err(format!("{path}.{k}"), format!("`{base}` given twice")));
-                }
-                out = Some(self.number(v, &format!("{path}.{k}"))? * f);
-            }
-        }
-        Ok(out)
-    }
-}
-
-fn type_name(v: &Value) -> &'static str {
-    match v {
-        Value::Null => "null",
-        Value::Bool(_) => "a boolean",
-        Value::Number(_) => "a number",
-        Value::String(_) => "a string",
-        Value::Array(_) => "an array",
-        Value::Object(_) => "an object",
-    }
-}
-
-/// Tracks the one value kind of a parameter across its fields.
-struct KindTracker {
-    kind: Option<(Kind, String)>,
-}
-
-fn kind_units(k: Kind) -> &'static str {
-    match k {
-        Kind::Length => "mm, um, nm",
-        Kind::Angle => "rad, mrad, urad, arcsec, deg",
-    }
-}
-
-impl KindTracker {
-    fn see(&mut self, u: Unit, key: &str) -> Result<f64> {
-        if let Some((k, prev)) = &self.kind
-            && *k != u.kind()
-        {
-            return Err(Error::Unit {
-                field: key.to_string(),
-                unit: u.suffix().to_string(),
-                message: format!(
-                    "unit mismatch: `{prev}` makes this parameter a {k:?} ({}), but `{}` is a unit of {:?}",
-                    kind_units(*k),
-                    u.suffix(),
-                    u.kind()
-                ),
-            });
-        }
-        if self.kind.is_none() {
-            self.kind = Some((u.kind(), key.to_string()));
-        }
-        Ok(u.to_internal())
-    }
-}
-
 impl ErrorSet {
     /// An empty set.
     pub fn new(name: &str) -> ErrorSet {
@@ -508,87 +364,64 @@ impl ErrorSet {
         source_name: &str,
         base_dir: Option<&Path>,
     ) -> Result<ErrorSet> {
-        let p = P {
-            src: source_name,
-            dir: base_dir,
+        let err = |field: String, message: String| Error::Json {
+            source_name: source_name.to_string(),
+            field,
+            message,
         };
-        let root: Value = serde_json::from_str(text).map_err(|e| {
-            p.err(
+        let mut root = json::parse(text).map_err(|e| {
+            err(
                 format!("(line {}, column {})", e.line(), e.column()),
                 e.to_string(),
             )
         })?;
-        let m = p.obj(&root, "(root)")?;
-        p.check_keys(
-            m,
-            "(root)",
-            &[
-                "format",
-                "name",
-                "description",
-                "machine",
-                "parameters",
-                "note",
-            ],
-        )
-        .map_err(strip_root)?;
-        match m.get("format") {
-            Some(Value::String(f)) if f == FORMAT => {}
-            Some(v) => return Err(p.err("format", format!("expected \"{FORMAT}\", found {v}"))),
-            None => return Err(p.err("format", format!("missing (expected \"{FORMAT}\")"))),
-        }
-        let name = p
-            .str(m, "", "name")
-            .map_err(strip_root)?
-            .unwrap_or(source_name)
-            .to_string();
-        let description = p
-            .str(m, "", "description")
-            .map_err(strip_root)?
-            .unwrap_or("")
-            .to_string();
-        let machine = p
-            .str(m, "", "machine")
-            .map_err(strip_root)?
-            .map(str::to_string);
-        let params = match m.get("parameters") {
-            Some(Value::Array(a)) => a,
-            Some(v) => {
-                return Err(p.err(
-                    "parameters",
-                    format!("expected an array, found {}", type_name(v)),
-                ));
+        let original = root.clone();
+        // `parameters[2]._um` → `parameters[2] (EXX)_um`… see split_units
+        let field = |path: &str| {
+            let path = path.replace("._", "_");
+            let entry = path
+                .strip_prefix("parameters[")
+                .and_then(|r| r.split_once(']'));
+            match entry.and_then(|(i, rest)| {
+                let name = original["parameters"][i.parse::<usize>().ok()?]["name"].as_str()?;
+                Some(format!("parameters[{i}] ({name}){rest}"))
+            }) {
+                Some(p) => p,
+                None if path.is_empty() => "(root)".to_string(),
+                None => path,
             }
-            None => return Err(p.err("parameters", "missing (expected an array of parameters)")),
         };
-        let mut entries = Vec::with_capacity(params.len());
-        for (i, v) in params.iter().enumerate() {
-            let e = parse_entry(&p, v, &format!("parameters[{i}]"))?;
-            if let Some(prev) = entries.iter().find(|x: &&Entry| x.name == e.name) {
-                return Err(p.err(
+        json::check_format(&root, FORMAT).map_err(|e| err(field(&e.path), e.message))?;
+        split_units(&mut root, "").map_err(|(path, m)| err(field(&path[1..]), m))?;
+        let set: SetJson = json::from_value(&root).map_err(|e| err(field(&e.path), e.message))?;
+        let mut entries: Vec<Entry> = Vec::with_capacity(set.parameters.len());
+        for (i, p) in set.parameters.iter().enumerate() {
+            if let Some(prev) = entries.iter().find(|x| x.name == p.name) {
+                return Err(err(
                     format!("parameters[{i}].name"),
                     format!(
                         "parameter `{}` is given twice (also {})",
-                        e.name, prev.field
+                        p.name, prev.field
                     ),
                 ));
             }
-            entries.push(e);
+            entries.push(p.entry(source_name, base_dir, i)?);
         }
         Ok(ErrorSet {
-            name,
-            description,
-            machine,
+            name: set.name.unwrap_or_else(|| source_name.to_string()),
+            description: set.description.unwrap_or_default(),
+            machine: set.machine,
             entries,
         })
     }
 
-    /// Read and parse a file (tables relative to its directory).
+    /// Read and parse a file (a regular file; a UTF-8 byte-order mark is dropped; tables
+    /// relative to its directory).
     ///
     /// # Errors
     /// [`Error::Io`] when the file cannot be read, else as [`ErrorSet::from_json_str`].
     pub fn from_file(path: &Path) -> Result<ErrorSet> {
-        let text = std::fs::read_to_string(path).map_err(|e| Error::Io {
+        let text = read_text(path).map_err(|e| Error::Io {
             path: path.display().to_string(),
             message: e.to_string(),
         })?;
@@ -645,585 +478,849 @@ impl ErrorSet {
     }
 }
 
-fn strip_root(e: Error) -> Error {
-    match e {
-        Error::Json {
-            source_name,
-            field,
-            message,
-        } => Error::Json {
-            source_name,
-            field: field
-                .trim_start_matches("(root)")
-                .trim_start_matches('.')
-                .to_string(),
-            message,
-        },
-        e => e,
+// The JSON form, read by serde into the `…Json` types below, then converted (units, kinds,
+// magnitudes) with the path of every field in its messages.
+
+/// Largest error value: 1 m (mm) or 1 rad; anything beyond is a typo or a wrong unit.
+fn max_error(k: Kind) -> (f64, &'static str) {
+    match k {
+        Kind::Length => (1e3, "1 m"),
+        Kind::Angle => (1.0, "1 rad"),
     }
 }
 
-fn parse_entry(p: &P, v: &Value, path: &str) -> Result<Entry> {
-    let m = p.obj(v, path)?;
-    p.check_keys(
-        m,
-        path,
-        &["name", "unit", "value", "model", "distribution", "note"],
-    )?;
-    let name = p
-        .str(m, path, "name")?
-        .ok_or_else(|| p.err(format!("{path}.name"), "missing parameter name"))?
-        .to_string();
-    let path = format!("{path} ({name})");
-    let default_unit = match p.str(m, &path, "unit")? {
-        Some(u) => Some((Unit::parse(u, &format!("{path}.unit"))?, "unit")),
-        None => None,
-    };
-    let mut kt = KindTracker {
-        kind: default_unit.map(|(u, _)| (u.kind(), format!("{path}.unit = \"{}\"", u.suffix()))),
-    };
-    let value = p.quantity(m, &path, "value", default_unit)?;
-    let model = m.get("model");
-    let distribution = match m.get("distribution") {
-        Some(d) => Some(parse_distribution(
-            p,
-            d,
-            &format!("{path}.distribution"),
-            default_unit,
-            &mut kt,
-        )?),
-        None => None,
-    };
-    let spec = match (value, model) {
-        (Some(_), Some(_)) => {
-            return Err(p.err(
-                format!("{path}.model"),
-                "give either a value or a model, not both",
+/// Largest axis position, period or distance: 10 km (mm) or 1e6 degrees.
+fn max_position(k: Kind) -> (f64, &'static str) {
+    match k {
+        Kind::Length => (1e7, "10 km"),
+        Kind::Angle => (1e6f64.to_radians(), "1e6 deg"),
+    }
+}
+
+/// Largest time (about 30 years).
+const MAX_TIME_S: f64 = 1e9;
+
+/// Moves unit suffixes out of keys, so that serde sees fixed field names: `"value_um": 5`
+/// becomes `"value": {"_um": 5}` (read as a [`Q`]); likewise `rate_um_per_h`, `tau_min`. A base
+/// given twice (`value_um` and `value_mm`, or `value` and `value_um`) is an error.
+fn split_units(v: &mut Value, path: &str) -> std::result::Result<(), (String, String)> {
+    match v {
+        Value::Array(a) => a
+            .iter_mut()
+            .enumerate()
+            .try_for_each(|(i, x)| split_units(x, &format!("{path}[{i}]"))),
+        Value::Object(m) => {
+            let mut out = Map::new();
+            let mut written: Vec<(String, String)> = Vec::new(); // (base, key as written)
+            for (k, mut x) in std::mem::take(m) {
+                split_units(&mut x, &format!("{path}.{k}"))?;
+                let (b, per) = k
+                    .split_once("_per_")
+                    .map_or((k.as_str(), None), |(b, p)| (b, Some(p)));
+                let base = match split_suffix(b) {
+                    Some((base, _)) => base,
+                    None if per.is_none() => ["_s", "_min", "_h"]
+                        .iter()
+                        .find_map(|t| k.strip_suffix(t))
+                        .unwrap_or(&k),
+                    None => &k,
+                };
+                if let Some((_, prev)) = written.iter().find(|(b, _)| b == base) {
+                    return Err((
+                        format!("{path}.{k}"),
+                        format!("given twice (also `{prev}`)"),
+                    ));
+                }
+                written.push((base.to_string(), k.clone()));
+                if base.len() < k.len() && !base.is_empty() {
+                    x = Value::Object(Map::from_iter([(k[base.len()..].to_string(), x)]));
+                }
+                out.insert(base.to_string(), x);
+            }
+            *m = out;
+            Ok(())
+        }
+        _ => Ok(()),
+    }
+}
+
+/// A quantity as written: a number or an array, with the unit suffix of its key (`"_um"`,
+/// `"_um_per_h"`, `"_min"`; see [`split_units`]) or none (`"value": 5` and the parameter's
+/// `unit`).
+struct Q<T> {
+    suffix: Option<String>,
+    v: T,
+}
+
+impl<'de, T: Deserialize<'de>> Deserialize<'de> for Q<T> {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> std::result::Result<Self, D::Error> {
+        use serde::de::{self, IntoDeserializer, value::SeqAccessDeserializer};
+        struct V<T>(std::marker::PhantomData<T>);
+        impl<'de, T: Deserialize<'de>> de::Visitor<'de> for V<T> {
+            type Value = Q<T>;
+            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                f.write_str("a finite number or an array of finite numbers")
+            }
+            fn visit_map<A: de::MapAccess<'de>>(
+                self,
+                mut m: A,
+            ) -> std::result::Result<Q<T>, A::Error> {
+                let suffix = m.next_key()?;
+                let v = m.next_value()?;
+                Ok(Q { suffix, v })
+            }
+            fn visit_seq<A: de::SeqAccess<'de>>(self, s: A) -> std::result::Result<Q<T>, A::Error> {
+                let v = T::deserialize(SeqAccessDeserializer::new(s))?;
+                Ok(Q { suffix: None, v })
+            }
+            fn visit_f64<E: de::Error>(self, x: f64) -> std::result::Result<Q<T>, E> {
+                let v = T::deserialize(x.into_deserializer())?;
+                Ok(Q { suffix: None, v })
+            }
+            fn visit_i64<E: de::Error>(self, x: i64) -> std::result::Result<Q<T>, E> {
+                self.visit_f64(x as f64)
+            }
+            fn visit_u64<E: de::Error>(self, x: u64) -> std::result::Result<Q<T>, E> {
+                self.visit_f64(x as f64)
+            }
+        }
+        d.deserialize_any(V(std::marker::PhantomData))
+    }
+}
+
+impl Q<f64> {
+    fn slice(&self) -> Q<&[f64]> {
+        Q {
+            suffix: self.suffix.clone(),
+            v: std::slice::from_ref(&self.v),
+        }
+    }
+}
+
+impl Q<Vec<f64>> {
+    fn slice(&self) -> Q<&[f64]> {
+        Q {
+            suffix: self.suffix.clone(),
+            v: &self.v,
+        }
+    }
+}
+
+/// Converts the fields of one parameter: the unit of its `unit` field, the kind (length or
+/// angle) the first unit fixed — every value of a parameter has one kind — and where tables are.
+struct Cx<'a> {
+    src: &'a str,
+    dir: Option<&'a Path>,
+    unit: Option<Unit>,
+    kind: Option<(Kind, String)>,
+}
+
+impl Cx<'_> {
+    fn err(&self, field: impl Into<String>, message: impl Into<String>) -> Error {
+        Error::Json {
+            source_name: self.src.to_string(),
+            field: field.into(),
+            message: message.into(),
+        }
+    }
+
+    /// The unit of `{path}.{base}…` and the key as written; `default`: the `unit` field applies.
+    fn unit(
+        &self,
+        suffix: &Option<String>,
+        path: &str,
+        base: &str,
+        default: bool,
+    ) -> Result<(Unit, String)> {
+        match (suffix, self.unit) {
+            (Some(s), _) => {
+                let key = format!("{path}.{base}{s}");
+                Ok((Unit::parse(s.trim_start_matches('_'), &key)?, key))
+            }
+            (None, Some(u)) if default => Ok((u, format!("{path}.{base}"))),
+            (None, _) => Err(self.err(
+                format!("{path}.{base}"),
+                format!("no unit: write `{base}_um`, `{base}_urad`, … or give a `unit` field"),
+            )),
+        }
+    }
+
+    /// Every number of `q` in internal units, each within `max(kind)`.
+    fn convert(
+        &self,
+        q: &Q<&[f64]>,
+        u: Unit,
+        key: &str,
+        max: fn(Kind) -> (f64, &'static str),
+        what: &str,
+    ) -> Result<Vec<f64>> {
+        let (limit, text) = max(u.kind());
+        let one = q.v.len() == 1;
+        q.v.iter()
+            .enumerate()
+            .map(|(i, x)| {
+                let y = x * u.to_internal();
+                if y.abs() > limit {
+                    let key = if one {
+                        key.to_string()
+                    } else {
+                        format!("{key}[{i}]")
+                    };
+                    return Err(self.err(
+                        key,
+                        format!("{x} {} is beyond any {what} (at most {text})", u.suffix()),
+                    ));
+                }
+                Ok(y)
+            })
+            .collect()
+    }
+
+    /// Error values: in the parameter's kind, at most 1 m or 1 rad.
+    fn values(&mut self, q: Q<&[f64]>, path: &str, base: &str) -> Result<Vec<f64>> {
+        let (u, key) = self.unit(&q.suffix, path, base, true)?;
+        self.see(u, &key)?;
+        self.convert(&q, u, &key, max_error, "machine error")
+    }
+
+    fn value(&mut self, q: &Q<f64>, path: &str, base: &str) -> Result<f64> {
+        Ok(self.values(q.slice(), path, base)?[0])
+    }
+
+    /// Positions (mm or rad, by their own suffix) and their kind.
+    fn positions(&self, q: Q<&[f64]>, path: &str, base: &str) -> Result<(Vec<f64>, Kind)> {
+        let (u, key) = self.unit(&q.suffix, path, base, false)?;
+        Ok((
+            self.convert(&q, u, &key, max_position, "machine")?,
+            u.kind(),
+        ))
+    }
+
+    fn position(&self, q: &Q<f64>, path: &str, base: &str) -> Result<(f64, Kind)> {
+        let (x, k) = self.positions(q.slice(), path, base)?;
+        Ok((x[0], k))
+    }
+
+    /// A length (mm) of a tolerance model: `error` says whether it is an error value (at most
+    /// 1 m) or a distance.
+    fn length(
+        &self,
+        q: Option<&Q<f64>>,
+        path: &str,
+        base: &str,
+        error: bool,
+    ) -> Result<Option<f64>> {
+        let Some(q) = q else { return Ok(None) };
+        let (u, key) = self.unit(&q.suffix, path, base, false)?;
+        u.expect_kind(Kind::Length, &key)?;
+        let max = if error { max_error } else { max_position };
+        Ok(Some(self.convert(&q.slice(), u, &key, max, "machine")?[0]))
+    }
+
+    /// A time (s) written `{base}_s`, `_min` or `_h`.
+    fn time(&self, q: Option<&Q<f64>>, path: &str, base: &str) -> Result<Option<f64>> {
+        let Some(q) = q else { return Ok(None) };
+        let s = q.suffix.as_deref().unwrap_or("");
+        let f = match s {
+            "_s" => 1.0,
+            "_min" => 60.0,
+            "_h" => 3600.0,
+            _ => {
+                return Err(self.err(
+                    format!("{path}.{base}{s}"),
+                    format!("expected a time: `{base}_s`, `{base}_min` or `{base}_h`"),
+                ));
+            }
+        };
+        if q.v.abs() * f > MAX_TIME_S {
+            return Err(self.err(
+                format!("{path}.{base}{s}"),
+                format!(
+                    "{} {} is beyond any run (at most {MAX_TIME_S:e} s)",
+                    q.v,
+                    &s[1..]
+                ),
             ));
         }
-        (Some((v, u, key)), None) => {
-            let f = kt.see(u, &key)?;
-            ModelSpec::Constant(p.number(v, &key)? * f)
+        Ok(Some(q.v * f))
+    }
+
+    /// Fixes the parameter's kind at the first unit seen; a later unit of the other kind is an
+    /// error naming both fields.
+    fn see(&mut self, u: Unit, key: &str) -> Result<()> {
+        match &self.kind {
+            Some((k, prev)) if *k != u.kind() => Err(Error::Unit {
+                field: key.to_string(),
+                unit: u.suffix().to_string(),
+                message: format!(
+                    "unit mismatch: `{prev}` makes this parameter a {k:?} ({}), but `{}` is a unit of {:?}",
+                    match k {
+                        Kind::Length => "mm, um, nm",
+                        Kind::Angle => "rad, mrad, urad, arcsec, deg",
+                    },
+                    u.suffix(),
+                    u.kind()
+                ),
+            }),
+            Some(_) => Ok(()),
+            None => {
+                self.kind = Some((u.kind(), key.to_string()));
+                Ok(())
+            }
         }
-        (None, Some(mv)) => {
-            if distribution.is_some() {
-                return Err(p.err(
+    }
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct SetJson {
+    #[serde(rename = "format")]
+    _format: String,
+    name: Option<String>,
+    description: Option<String>,
+    machine: Option<String>,
+    parameters: Vec<EntryJson>,
+    #[serde(rename = "note")]
+    _note: Option<IgnoredAny>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct EntryJson {
+    name: String,
+    unit: Option<String>,
+    value: Option<Q<f64>>,
+    model: Option<Tagged<ModelJson>>,
+    distribution: Option<Tagged<DistJson>>,
+    #[serde(rename = "note")]
+    _note: Option<IgnoredAny>,
+}
+
+impl EntryJson {
+    fn entry(&self, src: &str, dir: Option<&Path>, index: usize) -> Result<Entry> {
+        let path = format!("parameters[{index}] ({})", self.name);
+        let unit = match &self.unit {
+            Some(u) => Some(Unit::parse(u, &format!("{path}.unit"))?),
+            None => None,
+        };
+        let mut cx = Cx {
+            src,
+            dir,
+            unit,
+            kind: unit.map(|u| (u.kind(), format!("{path}.unit = \"{}\"", u.suffix()))),
+        };
+        let distribution = match &self.distribution {
+            Some(d) => Some(d.0.distribution(&mut cx, &format!("{path}.distribution"))?),
+            None => None,
+        };
+        let spec = match (&self.value, &self.model, &distribution) {
+            (Some(_), Some(_), _) => {
+                return Err(cx.err(
+                    format!("{path}.model"),
+                    "give either a value or a model, not both",
+                ));
+            }
+            (Some(v), None, _) => ModelSpec::Constant(cx.value(v, &path, "value")?),
+            (None, Some(_), Some(_)) => {
+                return Err(cx.err(
                     format!("{path}.distribution"),
                     "a distribution applies to a constant value; a parameter with a model cannot have one",
                 ));
             }
-            parse_model(p, mv, &format!("{path}.model"), default_unit, &mut kt)?
-        }
-        (None, None) => match &distribution {
-            Some(d) => ModelSpec::Constant(d.nominal()),
-            None => {
-                return Err(p.err(
-                    path.clone(),
-                    "needs `value_<unit>`, `model` or `distribution`",
-                ));
+            (None, Some(m), None) => m.0.spec(&mut cx, &format!("{path}.model"))?,
+            (None, None, Some(d)) => ModelSpec::Constant(d.nominal()),
+            (None, None, None) => {
+                return Err(cx.err(path, "needs `value_<unit>`, `model` or `distribution`"));
             }
-        },
-    };
-    let (kind, unit_field) = kt
-        .kind
-        .ok_or_else(|| p.err(path.clone(), "no unit anywhere in this parameter"))?;
-    Ok(Entry {
-        name,
-        field: path,
-        kind,
-        unit_field,
-        spec,
-        distribution,
-    })
+        };
+        let (kind, unit_field) = cx
+            .kind
+            .clone()
+            .ok_or_else(|| cx.err(path.clone(), "no unit anywhere in this parameter"))?;
+        Ok(Entry {
+            name: self.name.clone(),
+            field: path,
+            kind,
+            unit_field,
+            spec,
+            distribution,
+        })
+    }
 }
 
-fn parse_distribution(
-    p: &P,
-    v: &Value,
-    path: &str,
-    du: Option<(Unit, &str)>,
-    kt: &mut KindTracker,
-) -> Result<Distribution> {
-    let m = p.obj(v, path)?;
-    let ty = p.str(m, path, "type")?.ok_or_else(|| {
-        p.err(
-            format!("{path}.type"),
-            "missing (normal, uniform, truncated_normal or tolerance)",
-        )
-    })?;
-    let mut q = |base: &str, required: bool| -> Result<Option<f64>> {
-        match p.quantity(m, path, base, du)? {
-            Some((v, u, key)) => {
-                let f = kt.see(u, &key)?;
-                Ok(Some(p.number(v, &key)? * f))
+#[derive(Deserialize)]
+#[serde(rename_all = "snake_case", deny_unknown_fields)]
+enum DistJson {
+    Normal {
+        mean: Option<Q<f64>>,
+        sd: Q<f64>,
+    },
+    Uniform {
+        low: Q<f64>,
+        high: Q<f64>,
+    },
+    TruncatedNormal {
+        mean: Option<Q<f64>>,
+        sd: Q<f64>,
+        low: Q<f64>,
+        high: Q<f64>,
+    },
+    Tolerance {
+        tolerance: Q<f64>,
+        sigma_level: Option<f64>,
+        truncate: Option<bool>,
+    },
+}
+
+impl DistJson {
+    fn distribution(&self, cx: &mut Cx, path: &str) -> Result<Distribution> {
+        let mut q = |q: &Q<f64>, base: &str| cx.value(q, path, base);
+        let (d, ty) = match self {
+            DistJson::Normal { mean, sd } => (
+                Distribution::Normal {
+                    mean: mean.as_ref().map_or(Ok(0.0), |m| q(m, "mean"))?,
+                    sd: q(sd, "sd")?,
+                },
+                "normal",
+            ),
+            DistJson::Uniform { low, high } => (
+                Distribution::Uniform {
+                    lo: q(low, "low")?,
+                    hi: q(high, "high")?,
+                },
+                "uniform",
+            ),
+            DistJson::TruncatedNormal {
+                mean,
+                sd,
+                low,
+                high,
+            } => (
+                Distribution::TruncatedNormal {
+                    mean: mean.as_ref().map_or(Ok(0.0), |m| q(m, "mean"))?,
+                    sd: q(sd, "sd")?,
+                    lo: q(low, "low")?,
+                    hi: q(high, "high")?,
+                },
+                "truncated_normal",
+            ),
+            DistJson::Tolerance {
+                tolerance,
+                sigma_level,
+                truncate,
+            } => {
+                let t = q(tolerance, "tolerance")?;
+                let d = crate::distribution::from_tolerance(
+                    t,
+                    sigma_level.unwrap_or(3.0),
+                    truncate.unwrap_or(false),
+                )
+                .map_err(|e| rename(e, path))?;
+                (d, "tolerance")
             }
-            None if required => Err(p.err(
-                format!("{path}.{base}_<unit>"),
-                format!("missing `{base}` (e.g. `{base}_um`)"),
-            )),
-            None => Ok(None),
+        };
+        crate::distribution::validate(&d, ty).map_err(|e| rename(e, path))?;
+        Ok(d)
+    }
+}
+
+/// One JSON model (`"type": "<name>"`): its fields are read by serde, [`JsonModel::spec`]
+/// converts them (see the module docs for adding one).
+trait JsonModel {
+    /// The model's spec; `path` names the model object in messages (`parameters[3] (EXX).model`).
+    fn spec(&self, cx: &mut Cx, path: &str) -> Result<ModelSpec>;
+}
+
+/// Registers the JSON models: `Variant(Struct)` is `"type": "variant"` in snake case.
+macro_rules! json_models {
+    ($($variant:ident($ty:ident)),* $(,)?) => {
+        #[derive(Deserialize)]
+        #[serde(rename_all = "snake_case")]
+        enum ModelJson {
+            $($variant($ty)),*
+        }
+        impl JsonModel for ModelJson {
+            fn spec(&self, cx: &mut Cx, path: &str) -> Result<ModelSpec> {
+                match self {
+                    $(ModelJson::$variant(m) => m.spec(cx, path)),*
+                }
+            }
         }
     };
-    let d = match ty {
-        "normal" => {
-            p.check_keys(m, path, &["type", "mean", "sd"])?;
-            Distribution::Normal {
-                mean: q("mean", false)?.unwrap_or(0.0),
-                sd: q("sd", true)?.unwrap_or(0.0),
-            }
-        }
-        "uniform" => {
-            p.check_keys(m, path, &["type", "low", "high"])?;
-            Distribution::Uniform {
-                lo: q("low", true)?.unwrap_or(0.0),
-                hi: q("high", true)?.unwrap_or(0.0),
-            }
-        }
-        "truncated_normal" => {
-            p.check_keys(m, path, &["type", "mean", "sd", "low", "high"])?;
-            Distribution::TruncatedNormal {
-                mean: q("mean", false)?.unwrap_or(0.0),
-                sd: q("sd", true)?.unwrap_or(0.0),
-                lo: q("low", true)?.unwrap_or(0.0),
-                hi: q("high", true)?.unwrap_or(0.0),
-            }
-        }
-        "tolerance" => {
-            p.check_keys(m, path, &["type", "tolerance", "sigma_level", "truncate"])?;
-            let t = q("tolerance", true)?.unwrap_or(0.0);
-            let k = match m.get("sigma_level") {
-                Some(v) => p.number(v, &format!("{path}.sigma_level"))?,
-                None => 3.0,
-            };
-            let tr = match m.get("truncate") {
-                None => false,
-                Some(Value::Bool(b)) => *b,
-                Some(v) => {
-                    return Err(p.err(
-                        format!("{path}.truncate"),
-                        format!("expected true or false, found {}", type_name(v)),
-                    ));
+}
+
+json_models!(
+    Constant(ConstantJson),
+    Legendre(LegendreJson),
+    Fourier(FourierJson),
+    Tolerance(ToleranceJson),
+    Table(TableJson),
+    ThermalLinear(ThermalLinearJson),
+    ThermalExponential(ThermalExponentialJson),
+    Reversal(ReversalJson),
+    Sum(SumJson),
+);
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ConstantJson {
+    value: Q<f64>,
+}
+
+impl JsonModel for ConstantJson {
+    fn spec(&self, cx: &mut Cx, path: &str) -> Result<ModelSpec> {
+        Ok(ModelSpec::Constant(cx.value(&self.value, path, "value")?))
+    }
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct LegendreJson {
+    coefficients: Q<Vec<f64>>,
+    range: Option<Q<Vec<f64>>>,
+}
+
+impl JsonModel for LegendreJson {
+    fn spec(&self, cx: &mut Cx, path: &str) -> Result<ModelSpec> {
+        let coefficients = cx.values(self.coefficients.slice(), path, "coefficients")?;
+        let range = match &self.range {
+            Some(q) => match cx.positions(q.slice(), path, "range")? {
+                (r, k) if r.len() == 2 => Some((r[0], r[1], k)),
+                _ => {
+                    let s = q.suffix.as_deref().unwrap_or("");
+                    return Err(cx.err(format!("{path}.range{s}"), "expected [low, high]"));
                 }
-            };
-            crate::distribution::from_tolerance(t, k, tr).map_err(|e| rename(e, path))?
-        }
-        other => {
-            return Err(p.err(
-                format!("{path}.type"),
-                format!(
-                    "unknown distribution `{other}` (normal, uniform, truncated_normal, tolerance)"
-                ),
+            },
+            None => None,
+        };
+        Ok(ModelSpec::Legendre {
+            coefficients,
+            range,
+        })
+    }
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct FourierJson {
+    offset: Option<Q<f64>>,
+    cos: Option<Q<Vec<f64>>>,
+    sin: Option<Q<Vec<f64>>>,
+    period: Q<f64>,
+    phase_origin: Option<Q<f64>>,
+}
+
+impl JsonModel for FourierJson {
+    fn spec(&self, cx: &mut Cx, path: &str) -> Result<ModelSpec> {
+        let offset = match &self.offset {
+            Some(o) => cx.value(o, path, "offset")?,
+            None => 0.0,
+        };
+        let mut series = |q: &Option<Q<Vec<f64>>>, base| match q {
+            Some(q) => cx.values(q.slice(), path, base),
+            None => Ok(Vec::new()),
+        };
+        let (cos, sin) = (series(&self.cos, "cos")?, series(&self.sin, "sin")?);
+        if cos.is_empty() && sin.is_empty() && cx.kind.is_none() {
+            return Err(cx.err(
+                format!("{path}.cos_<unit>"),
+                "missing `cos` (e.g. `cos_um`)",
             ));
         }
-    };
-    crate::distribution::validate(&d, ty).map_err(|e| rename(e, path))?;
-    Ok(d)
-}
-
-/// Position-like quantity (mm / deg / rad): returns internal value(s) and kind.
-fn position_q<'v>(
-    p: &P,
-    m: &'v Map<String, Value>,
-    path: &str,
-    base: &str,
-) -> Result<Option<(&'v Value, Unit, String)>> {
-    p.quantity(m, path, base, None)
-}
-
-fn parse_model(
-    p: &P,
-    v: &Value,
-    path: &str,
-    du: Option<(Unit, &str)>,
-    kt: &mut KindTracker,
-) -> Result<ModelSpec> {
-    let m = p.obj(v, path)?;
-    let ty = p.str(m, path, "type")?.ok_or_else(|| {
-        p.err(
-            format!("{path}.type"),
-            "missing (constant, legendre, fourier, tolerance, table, thermal_linear, thermal_exponential, reversal, sum)",
-        )
-    })?;
-    let val = |base: &str, kt: &mut KindTracker| -> Result<Option<(Vec<f64>, bool)>> {
-        match p.quantity(m, path, base, du)? {
-            Some((v, u, key)) => {
-                let f = kt.see(u, &key)?;
-                if v.is_array() {
-                    Ok(Some((
-                        p.numbers(v, &key)?.into_iter().map(|x| x * f).collect(),
-                        true,
-                    )))
-                } else {
-                    Ok(Some((vec![p.number(v, &key)? * f], false)))
-                }
-            }
-            None => Ok(None),
-        }
-    };
-    let missing = |base: &str| {
-        p.err(
-            format!("{path}.{base}_<unit>"),
-            format!("missing `{base}` (e.g. `{base}_um`)"),
-        )
-    };
-    let scalar = |x: Option<(Vec<f64>, bool)>, base: &str| -> Result<Option<f64>> {
-        match x {
-            None => Ok(None),
-            Some((v, false)) => Ok(Some(v[0])),
-            Some(_) => Err(p.err(
-                format!("{path}.{base}"),
-                "expected a number, found an array",
-            )),
-        }
-    };
-    let array = |x: Option<(Vec<f64>, bool)>, base: &str| -> Result<Option<Vec<f64>>> {
-        match x {
-            None => Ok(None),
-            Some((v, true)) => Ok(Some(v)),
-            Some(_) => Err(p.err(format!("{path}.{base}"), "expected an array of numbers")),
-        }
-    };
-    let pos_scalar = |base: &str| -> Result<Option<(f64, Kind)>> {
-        match position_q(p, m, path, base)? {
-            Some((v, u, key)) => Ok(Some((p.number(v, &key)? * u.to_internal(), u.kind()))),
-            None => Ok(None),
-        }
-    };
-    let spec = match ty {
-        "constant" => {
-            p.check_keys(m, path, &["type", "value"])?;
-            ModelSpec::Constant(
-                scalar(val("value", kt)?, "value")?.ok_or_else(|| missing("value"))?,
-            )
-        }
-        "legendre" => {
-            p.check_keys(m, path, &["type", "coefficients", "range"])?;
-            let c = array(val("coefficients", kt)?, "coefficients")?
-                .ok_or_else(|| missing("coefficients"))?;
-            let range = match position_q(p, m, path, "range")? {
-                Some((v, u, key)) => {
-                    let r = p.numbers(v, &key)?;
-                    if r.len() != 2 {
-                        return Err(p.err(key, "expected [low, high]"));
-                    }
-                    Some((r[0] * u.to_internal(), r[1] * u.to_internal(), u.kind()))
-                }
-                None => None,
-            };
-            ModelSpec::Legendre {
-                coefficients: c,
-                range,
-            }
-        }
-        "fourier" => {
-            p.check_keys(
-                m,
-                path,
-                &["type", "offset", "cos", "sin", "period", "phase_origin"],
-            )?;
-            let offset = scalar(val("offset", kt)?, "offset")?.unwrap_or(0.0);
-            let cos = array(val("cos", kt)?, "cos")?.unwrap_or_default();
-            let sin = array(val("sin", kt)?, "sin")?.unwrap_or_default();
-            if cos.is_empty() && sin.is_empty() && kt.kind.is_none() {
-                return Err(missing("cos"));
-            }
-            let (period, pk) = pos_scalar("period")?.ok_or_else(|| {
-                p.err(
-                    format!("{path}.period_<unit>"),
-                    "missing `period` (e.g. `period_mm`)",
-                )
-            })?;
-            let phase = match pos_scalar("phase_origin")? {
-                Some((x, k)) if k == pk => x,
-                Some(_) => {
-                    return Err(p.err(
+        let (period, position_kind) = cx.position(&self.period, path, "period")?;
+        let phase_origin = match &self.phase_origin {
+            Some(p) => match cx.position(p, path, "phase_origin")? {
+                (x, k) if k == position_kind => x,
+                _ => {
+                    return Err(cx.err(
                         format!("{path}.phase_origin"),
                         "phase origin and period must both be lengths or both angles",
                     ));
                 }
-                None => 0.0,
-            };
-            ModelSpec::Fourier {
-                offset,
-                cos,
-                sin,
-                period,
-                phase_origin: phase,
-                position_kind: pk,
-            }
-        }
-        "tolerance" => parse_tolerance(p, m, path, kt)?,
-        "table" => {
-            p.check_keys(
-                m,
-                path,
-                &[
-                    "type",
-                    "file",
-                    "position_column",
-                    "value_column",
-                    "positions",
-                    "values",
-                ],
-            )?;
-            if let Some(file) = p.str(m, path, "file")? {
-                let full = match p.dir {
-                    Some(d) => d.join(file),
-                    None => Path::new(file).to_path_buf(),
-                };
-                let text = std::fs::read_to_string(&full).map_err(|e| Error::Io {
-                    path: full.display().to_string(),
-                    message: e.to_string(),
-                })?;
-                let pc = p.str(m, path, "position_column")?.unwrap_or("position");
-                let vc = p.str(m, path, "value_column")?.unwrap_or("error");
-                let t = CsvTable::parse(&text, &full.display().to_string())?;
-                let (pci, pu) = t.require_with_unit(pc, &format!("{pc}_mm"))?;
-                let (vci, vu) = t.require_with_unit(vc, &format!("{vc}_um"))?;
-                kt.see(
-                    vu,
-                    &format!("{}: column `{}`", full.display(), t.headers[vci]),
-                )?;
-                let _ = pci;
-                let tab = Tabulated::from_csv(
-                    &text,
-                    &full.display().to_string(),
-                    pc,
-                    vc,
-                    vu.kind(),
-                    None,
-                )?;
-                ModelSpec::Table {
-                    positions: tab.positions().to_vec(),
-                    values: tab.values().to_vec(),
-                    position_kind: pu.kind(),
-                }
-            } else {
-                let values =
-                    array(val("values", kt)?, "values")?.ok_or_else(|| missing("values"))?;
-                let (pv, pu, key) = position_q(p, m, path, "positions")?.ok_or_else(|| {
-                    p.err(
-                        format!("{path}.positions_<unit>"),
-                        "missing `positions` (e.g. `positions_mm`) or `file`",
-                    )
-                })?;
-                let positions: Vec<f64> = p
-                    .numbers(pv, &key)?
-                    .into_iter()
-                    .map(|x| x * pu.to_internal())
-                    .collect();
-                if let Some(i) = (1..positions.len()).find(|&i| positions[i] <= positions[i - 1]) {
-                    return Err(p.err(format!("{key}[{i}]"), "positions must strictly increase"));
-                }
-                if positions.len() != values.len() {
-                    return Err(p.err(
-                        key,
-                        format!("{} positions but {} values", positions.len(), values.len()),
-                    ));
-                }
-                ModelSpec::Table {
-                    positions,
-                    values,
-                    position_kind: pu.kind(),
-                }
-            }
-        }
-        "thermal_linear" => {
-            p.check_keys(m, path, &["type", "rate", "t0"])?;
-            let mut rate = None;
-            for (k, v) in m {
-                if let Some((b, per)) = k.split_once("_per_")
-                    && let Some((base, u)) = split_suffix(b)
-                    && base == "rate"
-                {
-                    let f = match per {
-                        "s" => 1.0,
-                        "min" => 1.0 / 60.0,
-                        "h" => 1.0 / 3600.0,
-                        _ => {
-                            return Err(p.err(
-                                format!("{path}.{k}"),
-                                "rate must be per s, per min or per h",
-                            ));
-                        }
-                    };
-                    let key = format!("{path}.{k}");
-                    let uf = kt.see(u, &key)?;
-                    rate = Some(p.number(v, &key)? * uf * f);
-                }
-            }
-            let rate = rate.ok_or_else(|| {
-                p.err(
-                    format!("{path}.rate"),
-                    "missing `rate_<unit>_per_<s|min|h>` (e.g. `rate_um_per_h`)",
-                )
-            })?;
-            ModelSpec::ThermalLinear(ThermalLinear {
-                rate_per_s: rate,
-                t0_s: p.time(m, path, "t0")?.unwrap_or(0.0),
-            })
-        }
-        "thermal_exponential" => {
-            p.check_keys(m, path, &["type", "amplitude", "tau", "t0"])?;
-            let a =
-                scalar(val("amplitude", kt)?, "amplitude")?.ok_or_else(|| missing("amplitude"))?;
-            let tau = p.time(m, path, "tau")?.ok_or_else(|| {
-                p.err(
-                    format!("{path}.tau_s"),
-                    "missing `tau_s` (or tau_min, tau_h)",
-                )
-            })?;
-            ModelSpec::ThermalExponential {
-                amplitude: a,
-                tau_s: tau,
-                t0_s: p.time(m, path, "t0")?.unwrap_or(0.0),
-            }
-        }
-        "reversal" => {
-            p.check_keys(m, path, &["type", "span"])?;
-            ModelSpec::Reversal(scalar(val("span", kt)?, "span")?.ok_or_else(|| missing("span"))?)
-        }
-        "sum" => {
-            p.check_keys(m, path, &["type", "terms"])?;
-            let terms = m
-                .get("terms")
-                .and_then(Value::as_array)
-                .ok_or_else(|| p.err(format!("{path}.terms"), "expected an array of models"))?;
-            let mut parts = Vec::with_capacity(terms.len());
-            for (i, t) in terms.iter().enumerate() {
-                parts.push(parse_model(p, t, &format!("{path}.terms[{i}]"), du, kt)?);
-            }
-            ModelSpec::Sum(parts)
-        }
-        other => {
-            return Err(p.err(
-                format!("{path}.type"),
-                format!(
-                    "unknown model `{other}` (constant, legendre, fourier, tolerance, table, thermal_linear, thermal_exponential, reversal, sum)"
-                ),
-            ));
-        }
-    };
-    Ok(spec)
+            },
+            None => 0.0,
+        };
+        Ok(ModelSpec::Fourier {
+            offset,
+            cos,
+            sin,
+            period,
+            phase_origin,
+            position_kind,
+        })
+    }
 }
 
-fn parse_tolerance(
-    p: &P,
-    m: &Map<String, Value>,
-    path: &str,
-    kt: &mut KindTracker,
-) -> Result<ModelSpec> {
-    p.check_keys(
-        m,
-        path,
-        &[
-            "type",
-            "form",
-            "tolerance",
-            "half_waves",
-            "scale",
-            "carriage_spacing",
-            "rail_spacing",
-            "sign",
-            "stroke",
-            "origin",
-        ],
-    )?;
-    let form = p.str(m, path, "form")?.ok_or_else(|| {
-        p.err(
-            format!("{path}.form"),
-            "missing (straightness, positioning, carriage_difference, twist)",
-        )
-    })?;
-    let len = |base: &str, required: bool| -> Result<Option<f64>> {
-        match p.quantity(m, path, base, None)? {
-            Some((v, u, key)) => {
-                u.expect_kind(Kind::Length, &key)?;
-                Ok(Some(p.number(v, &key)? * u.to_internal()))
-            }
-            None if required => Err(p.err(
-                format!("{path}.{base}_<unit>"),
-                format!("missing `{base}` (e.g. `{base}_um` or `{base}_mm`)"),
-            )),
-            None => Ok(None),
-        }
-    };
-    let k = len("tolerance", true)?.unwrap_or(0.0);
-    let n = match m.get("half_waves") {
-        None => 1,
-        Some(v) => {
-            let x = p.number(v, &format!("{path}.half_waves"))?;
-            if x.fract() != 0.0 || !(1.0..=8.0).contains(&x) {
-                return Err(p.err(
+#[derive(Deserialize)]
+#[serde(rename_all = "snake_case")]
+enum FormJson {
+    Straightness,
+    Positioning,
+    CarriageDifference,
+    Twist,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ToleranceJson {
+    form: FormJson,
+    tolerance: Q<f64>,
+    half_waves: Option<f64>,
+    scale: Option<Q<f64>>,
+    carriage_spacing: Option<Q<f64>>,
+    rail_spacing: Option<Q<f64>>,
+    sign: Option<f64>,
+    stroke: Option<Q<f64>>,
+    origin: Option<Q<f64>>,
+}
+
+impl JsonModel for ToleranceJson {
+    fn spec(&self, cx: &mut Cx, path: &str) -> Result<ModelSpec> {
+        let tolerance = cx
+            .length(Some(&self.tolerance), path, "tolerance", true)?
+            .unwrap_or(0.0);
+        let half_waves = match self.half_waves {
+            None => 1,
+            Some(x) if x.fract() == 0.0 && (1.0..=8.0).contains(&x) => x as u32,
+            Some(x) => {
+                return Err(cx.err(
                     format!("{path}.half_waves"),
                     format!("expected an integer in 1..=8, found {x}"),
                 ));
             }
-            x as u32
-        }
-    };
-    let out_kind = |kind: Kind, kt: &mut KindTracker| -> Result<()> {
-        kt.see(
-            if kind == Kind::Length {
-                Unit::Mm
-            } else {
-                Unit::Rad
-            },
-            &format!("{path}.form ({form})"),
-        )
-        .map(|_| ())
-    };
-    let f = match form {
-        "straightness" => {
-            out_kind(Kind::Length, kt)?;
-            ToleranceForm::Straightness {
-                tolerance: k,
-                half_waves: n,
-            }
-        }
-        "positioning" => {
-            out_kind(Kind::Length, kt)?;
-            ToleranceForm::Positioning {
-                tolerance: k,
-                half_waves: n,
-                scale: len("scale", false)?.unwrap_or(0.0),
-            }
-        }
-        "carriage_difference" => {
-            out_kind(Kind::Angle, kt)?;
-            let sign = match m.get("sign") {
-                None => 1.0,
-                Some(v) => p.number(v, &format!("{path}.sign"))?,
+        };
+        let required = |q: &Option<Q<f64>>, base: &str| {
+            let q = q.as_ref();
+            cx.length(q, path, base, false)?.ok_or_else(|| {
+                cx.err(
+                    format!("{path}.{base}_<unit>"),
+                    format!("missing `{base}` (e.g. `{base}_um` or `{base}_mm`)"),
+                )
+            })
+        };
+        let (form, kind) = match self.form {
+            FormJson::Straightness => (
+                ToleranceForm::Straightness {
+                    tolerance,
+                    half_waves,
+                },
+                Kind::Length,
+            ),
+            FormJson::Positioning => (
+                ToleranceForm::Positioning {
+                    tolerance,
+                    half_waves,
+                    scale: cx
+                        .length(self.scale.as_ref(), path, "scale", true)?
+                        .unwrap_or(0.0),
+                },
+                Kind::Length,
+            ),
+            FormJson::CarriageDifference => (
+                ToleranceForm::CarriageDifference {
+                    tolerance,
+                    half_waves,
+                    carriage_spacing: required(&self.carriage_spacing, "carriage_spacing")?,
+                    sign: self.sign.unwrap_or(1.0),
+                },
+                Kind::Angle,
+            ),
+            FormJson::Twist => (
+                ToleranceForm::Twist {
+                    tolerance,
+                    half_waves,
+                    rail_spacing: required(&self.rail_spacing, "rail_spacing")?,
+                },
+                Kind::Angle,
+            ),
+        };
+        let internal = if kind == Kind::Length {
+            Unit::Mm
+        } else {
+            Unit::Rad
+        };
+        cx.see(internal, &format!("{path}.form"))?;
+        Ok(ModelSpec::Tolerance {
+            form,
+            stroke: cx.length(self.stroke.as_ref(), path, "stroke", false)?,
+            origin: cx.length(self.origin.as_ref(), path, "origin", false)?,
+        })
+    }
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct TableJson {
+    file: Option<String>,
+    position_column: Option<String>,
+    value_column: Option<String>,
+    positions: Option<Q<Vec<f64>>>,
+    values: Option<Q<Vec<f64>>>,
+}
+
+impl JsonModel for TableJson {
+    fn spec(&self, cx: &mut Cx, path: &str) -> Result<ModelSpec> {
+        let Some(file) = &self.file else {
+            let values = match &self.values {
+                Some(v) => cx.values(v.slice(), path, "values")?,
+                None => {
+                    return Err(cx.err(
+                        format!("{path}.values_<unit>"),
+                        "missing `values` (e.g. `values_um`)",
+                    ));
+                }
             };
-            ToleranceForm::CarriageDifference {
-                tolerance: k,
-                half_waves: n,
-                carriage_spacing: len("carriage_spacing", true)?.unwrap_or(0.0),
-                sign,
+            let Some(p) = &self.positions else {
+                return Err(cx.err(
+                    format!("{path}.positions_<unit>"),
+                    "missing `positions` (e.g. `positions_mm`) or `file`",
+                ));
+            };
+            let (positions, position_kind) = cx.positions(p.slice(), path, "positions")?;
+            let key = format!("{path}.positions{}", p.suffix.as_deref().unwrap_or(""));
+            if let Some(i) = (1..positions.len()).find(|&i| positions[i] <= positions[i - 1]) {
+                return Err(cx.err(format!("{key}[{i}]"), "positions must strictly increase"));
+            }
+            if positions.len() != values.len() {
+                return Err(cx.err(
+                    key,
+                    format!("{} positions but {} values", positions.len(), values.len()),
+                ));
+            }
+            return Ok(ModelSpec::Table {
+                positions,
+                values,
+                position_kind,
+            });
+        };
+        let full = cx
+            .dir
+            .map_or_else(|| Path::new(file).to_path_buf(), |d| d.join(file));
+        let name = full.display().to_string();
+        let text = read_text(&full).map_err(|e| Error::Io {
+            path: name.clone(),
+            message: e.to_string(),
+        })?;
+        let pc = self.position_column.as_deref().unwrap_or("position");
+        let vc = self.value_column.as_deref().unwrap_or("error");
+        let t = CsvTable::parse(&text, &name)?;
+        let (_, pu) = t.require_with_unit(pc, &format!("{pc}_mm"))?;
+        let (vci, vu) = t.require_with_unit(vc, &format!("{vc}_um"))?;
+        cx.see(vu, &format!("{name}: column `{}`", t.headers[vci]))?;
+        let tab = Tabulated::from_csv(&text, &name, pc, vc, vu.kind(), None)?;
+        for (xs, u, limit) in [
+            (tab.positions(), pu, max_position(pu.kind())),
+            (tab.values(), vu, max_error(vu.kind())),
+        ] {
+            if let Some(x) = xs.iter().find(|x| x.abs() > limit.0) {
+                return Err(cx.err(
+                    format!("{name}: column {}", if u == pu { pc } else { vc }),
+                    format!(
+                        "{} {} is beyond any machine (at most {})",
+                        x / u.to_internal(),
+                        u.suffix(),
+                        limit.1
+                    ),
+                ));
             }
         }
-        "twist" => {
-            out_kind(Kind::Angle, kt)?;
-            ToleranceForm::Twist {
-                tolerance: k,
-                half_waves: n,
-                rail_spacing: len("rail_spacing", true)?.unwrap_or(0.0),
+        Ok(ModelSpec::Table {
+            positions: tab.positions().to_vec(),
+            values: tab.values().to_vec(),
+            position_kind: pu.kind(),
+        })
+    }
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ThermalLinearJson {
+    rate: Q<f64>,
+    t0: Option<Q<f64>>,
+}
+
+impl JsonModel for ThermalLinearJson {
+    fn spec(&self, cx: &mut Cx, path: &str) -> Result<ModelSpec> {
+        let s = self.rate.suffix.as_deref().unwrap_or("");
+        let (unit, per) = s.split_once("_per_").unwrap_or((s, ""));
+        let key = format!("{path}.rate{s}");
+        let per_s = match per {
+            "s" => 1.0,
+            "min" => 1.0 / 60.0,
+            "h" => 1.0 / 3600.0,
+            _ => {
+                return Err(cx.err(
+                    key,
+                    "expected `rate_<unit>_per_<s|min|h>` (e.g. `rate_um_per_h`)",
+                ));
             }
-        }
-        other => {
-            return Err(p.err(
-                format!("{path}.form"),
+        };
+        let u = Unit::parse(unit.trim_start_matches('_'), &key)?;
+        cx.see(u, &key)?;
+        let rate_per_s = self.rate.v * u.to_internal() * per_s;
+        let (limit, text) = max_error(u.kind());
+        if rate_per_s.abs() * 3600.0 > limit {
+            return Err(cx.err(
+                key,
                 format!(
-                    "unknown form `{other}` (straightness, positioning, carriage_difference, twist)"
+                    "{} {}/{per} is beyond any thermal drift (at most {text} per hour)",
+                    self.rate.v,
+                    u.suffix()
                 ),
             ));
         }
-    };
-    Ok(ModelSpec::Tolerance {
-        form: f,
-        stroke: len("stroke", false)?,
-        origin: len("origin", false)?,
-    })
+        Ok(ModelSpec::ThermalLinear(ThermalLinear {
+            rate_per_s,
+            t0_s: cx.time(self.t0.as_ref(), path, "t0")?.unwrap_or(0.0),
+        }))
+    }
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ThermalExponentialJson {
+    amplitude: Q<f64>,
+    tau: Q<f64>,
+    t0: Option<Q<f64>>,
+}
+
+impl JsonModel for ThermalExponentialJson {
+    fn spec(&self, cx: &mut Cx, path: &str) -> Result<ModelSpec> {
+        Ok(ModelSpec::ThermalExponential {
+            amplitude: cx.value(&self.amplitude, path, "amplitude")?,
+            tau_s: cx.time(Some(&self.tau), path, "tau")?.unwrap_or(0.0),
+            t0_s: cx.time(self.t0.as_ref(), path, "t0")?.unwrap_or(0.0),
+        })
+    }
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ReversalJson {
+    span: Q<f64>,
+}
+
+impl JsonModel for ReversalJson {
+    fn spec(&self, cx: &mut Cx, path: &str) -> Result<ModelSpec> {
+        Ok(ModelSpec::Reversal(cx.value(&self.span, path, "span")?))
+    }
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct SumJson {
+    terms: Vec<Tagged<ModelJson>>,
+}
+
+impl JsonModel for SumJson {
+    fn spec(&self, cx: &mut Cx, path: &str) -> Result<ModelSpec> {
+        let terms = self.terms.iter().enumerate();
+        Ok(ModelSpec::Sum(
+            terms
+                .map(|(i, t)| t.0.spec(cx, &format!("{path}.terms[{i}]")))
+                .collect::<Result<_>>()?,
+        ))
+    }
 }
 
 #[cfg(test)]
@@ -1405,6 +1502,138 @@ mod tests {
             .to_string();
         assert!(e.contains("error_urad"), "{e}");
         std::fs::remove_dir_all(&dir).ok();
+    }
+
+    /// The input contract (issue #20): a BOM, unknown fields, magnitudes, duplicates.
+    #[test]
+    fn bom_is_accepted() {
+        let dir = std::env::temp_dir().join(format!("mte-errors-bom-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("s.json");
+        std::fs::write(&path, format!("\u{feff}{SET}")).unwrap();
+        assert_eq!(ErrorSet::from_file(&path).unwrap().entries.len(), 9);
+        std::fs::write(
+            dir.join("t.csv"),
+            "\u{feff}position_mm,error_um\n0,0\n50,1\n",
+        )
+        .unwrap();
+        let json = r#"{"format": "mte-errors/1", "parameters": [{"name": "EXX", "model": {"type": "table", "file": "t.csv"}}]}"#;
+        assert!(ErrorSet::from_json_str(json, "s.json", Some(&dir)).is_ok());
+        let e = ErrorSet::from_file(&dir).unwrap_err().to_string();
+        assert!(e.contains("not a regular file"), "{e}");
+        std::fs::remove_dir_all(&dir).ok();
+    }
+
+    #[test]
+    fn unknown_fields_are_rejected_at_every_level() {
+        let wrap = |p: &str| format!(r#"{{"format": "mte-errors/1", "parameters": [{p}]}}"#);
+        let e = err_of(r#"{"format": "mte-errors/1", "parameter": []}"#);
+        assert!(
+            e.starts_with("bad.json: field `parameter`: unknown field")
+                && e.contains("did you mean `parameters`?"),
+            "{e}"
+        );
+        let e = err_of(&wrap(
+            r#"{"name": "EXX", "model": {"type": "legendre", "coeficients_um": [1]}}"#,
+        ));
+        assert!(
+            e.contains("`parameters[0] (EXX).model.coeficients`")
+                && e.contains("did you mean `coefficients`?"),
+            "{e}"
+        );
+        let e = err_of(&wrap(
+            r#"{"name": "EXX", "distribution": {"type": "normal", "sd_um": 1, "mode_um": 0}}"#,
+        ));
+        assert!(
+            e.contains("`parameters[0] (EXX).distribution.mode`") && e.contains("unknown field"),
+            "{e}"
+        );
+        let e = err_of(&wrap(
+            r#"{"name": "EXX", "model": {"type": "tolerance", "form": "straight", "tolerance_um": 3}}"#,
+        ));
+        assert!(
+            e.contains("`parameters[0] (EXX).model.form`")
+                && e.contains("did you mean `straightness`?"),
+            "{e}"
+        );
+        let e = err_of(&wrap(
+            r#"{"name": "EXX", "model": {"type": "sum", "terms": [{"type": "reversal", "spam_um": 1}]}}"#,
+        ));
+        assert!(
+            e.contains("`parameters[0] (EXX).model.terms[0].spam`"),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn impossible_magnitudes_are_rejected() {
+        let wrap = |p: &str| format!(r#"{{"format": "mte-errors/1", "parameters": [{p}]}}"#);
+        for (p, field, what) in [
+            (
+                r#"{"name": "EXX", "value_mm": 2000}"#,
+                "parameters[0] (EXX).value_mm",
+                "2000 mm is beyond any machine error (at most 1 m)",
+            ),
+            (
+                r#"{"name": "EAX", "unit": "deg", "value": 90}"#,
+                "parameters[0] (EAX).value",
+                "90 deg is beyond any machine error (at most 1 rad)",
+            ),
+            (
+                r#"{"name": "EXX", "model": {"type": "legendre", "coefficients_um": [1, 2e9]}}"#,
+                "parameters[0] (EXX).model.coefficients_um[1]",
+                "2000000000 um",
+            ),
+            (
+                r#"{"name": "EXX", "model": {"type": "legendre", "coefficients_um": [1], "range_mm": [0, 1e12]}}"#,
+                "parameters[0] (EXX).model.range_mm[1]",
+                "(at most 10 km)",
+            ),
+            (
+                r#"{"name": "EXX", "model": {"type": "thermal_linear", "rate_mm_per_s": 1}}"#,
+                "parameters[0] (EXX).model.rate_mm_per_s",
+                "at most 1 m per hour",
+            ),
+            (
+                r#"{"name": "EXX", "model": {"type": "thermal_exponential", "amplitude_um": 1, "tau_h": 1e9}}"#,
+                "parameters[0] (EXX).model.tau_h",
+                "beyond any run",
+            ),
+            (
+                r#"{"name": "EXX", "distribution": {"type": "normal", "sd_um": 1e7}}"#,
+                "parameters[0] (EXX).distribution.sd_um",
+                "beyond any machine error",
+            ),
+        ] {
+            let e = err_of(&wrap(p));
+            assert!(
+                e.contains(&format!("bad.json: field `{field}`: ")) && e.contains(what),
+                "{e}"
+            );
+        }
+    }
+
+    #[test]
+    fn duplicates_name_both_occurrences() {
+        let wrap = |p: &str| format!(r#"{{"format": "mte-errors/1", "parameters": [{p}]}}"#);
+        let e = err_of(&wrap(r#"{"name": "EXX", "value_um": 1, "value_mm": 2}"#));
+        assert!(
+            e.contains("`parameters[0] (EXX).value_um`: given twice (also `value_mm`)"),
+            "{e}"
+        );
+        let e = err_of(&wrap(
+            r#"{"name": "EXX", "unit": "um", "value": 1, "value_um": 2}"#,
+        ));
+        assert!(e.contains("given twice (also `value`)"), "{e}");
+        let e = err_of(&wrap(
+            r#"{"name": "EXX", "value_um": 1}, {"name": "EYY", "value_um": 1}, {"name": "EXX", "value_um": 2}"#,
+        ));
+        assert!(
+            e.contains(
+                "`parameters[2].name`: parameter `EXX` is given twice (also parameters[0] (EXX))"
+            ),
+            "{e}"
+        );
     }
 
     #[test]

@@ -100,8 +100,8 @@ impl Evaluator {
                 return Err(crate::error::invalid(
                     &entry.field,
                     format!(
-                        "`{}` is the same parameter as `{}` ({})",
-                        entry.name, set.entries[k].name, p.name
+                        "`{}` is the same parameter as `{}` ({}; also {})",
+                        entry.name, set.entries[k].name, p.name, set.entries[k].field
                     ),
                 ));
             }

@@ -208,3 +208,16 @@ fn unknown_names_and_unit_mismatch_are_errors() {
     let e = Evaluator::new(&m, &set).unwrap_err().to_string();
     assert!(e.contains("same parameter"), "{e}");
 }
+
+/// Two entries of one slot (an ISO name and an alias) name both places.
+#[test]
+fn two_entries_of_one_parameter_name_both() {
+    let m = Machine::library("seed004-3axis").unwrap();
+    let json = r#"{"format": "mte-errors/1", "parameters": [{"name": "EXY", "value_um": 1}, {"name": "δx(y)", "value_um": 1}]}"#;
+    let set = ErrorSet::from_json_str(json, "s.json", None).unwrap();
+    let e = Evaluator::new(&m, &set).unwrap_err().to_string();
+    assert!(
+        e.contains("parameters[1] (δx(y))") && e.contains("also parameters[0] (EXY)"),
+        "{e}"
+    );
+}

@@ -3,7 +3,8 @@
 
 use crate::error::{KinError, Result};
 use mte_linalg::Vec3;
-use serde_json::{Map, Value};
+use mte_linalg::json::{self, Tagged};
+use serde::Deserialize;
 use std::collections::HashMap;
 use std::path::Path;
 
@@ -178,328 +179,64 @@ pub struct Machine {
     pub(crate) json: String,
 }
 
-struct Names {
-    /// "machine.json" or "<string>" or "library:NAME".
-    src: String,
+/// The file as written; [`Machine::parse`] checks what serde cannot (names, topology, ranges).
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct MachineJson {
+    #[serde(rename = "format")]
+    _format: String,
+    name: String,
+    description: Option<String>,
+    #[serde(rename = "source")]
+    _source: Option<String>,
+    bodies: Vec<BodyJson>,
+    tool: String,
+    workpiece: String,
+    axis_order: Option<Vec<String>>,
 }
 
-impl Names {
-    fn err(&self, field: impl Into<String>, message: impl Into<String>) -> KinError {
-        KinError::Field {
-            source_name: self.src.clone(),
-            field: field.into(),
-            message: message.into(),
-        }
-    }
-}
-
-fn type_name(v: &Value) -> &'static str {
-    match v {
-        Value::Null => "null",
-        Value::Bool(_) => "a boolean",
-        Value::Number(_) => "a number",
-        Value::String(_) => "a string",
-        Value::Array(_) => "an array",
-        Value::Object(_) => "an object",
-    }
-}
-
-fn check_keys(n: &Names, path: &str, obj: &Map<String, Value>, allowed: &[&str]) -> Result<()> {
-    for k in obj.keys() {
-        if !allowed.contains(&k.as_str()) {
-            return Err(n.err(
-                format!("{path}.{k}"),
-                format!("unknown field (expected one of: {})", allowed.join(", ")),
-            ));
-        }
-    }
-    Ok(())
-}
-
-fn get_str<'a>(n: &Names, path: &str, obj: &'a Map<String, Value>, key: &str) -> Result<&'a str> {
-    match obj.get(key) {
-        None => Err(n.err(format!("{path}.{key}"), "missing field (expected a string)")),
-        Some(Value::String(s)) => Ok(s),
-        Some(v) => Err(n.err(
-            format!("{path}.{key}"),
-            format!("expected a string, found {}", type_name(v)),
-        )),
-    }
-}
-
-fn get_opt_str<'a>(
-    n: &Names,
-    path: &str,
-    obj: &'a Map<String, Value>,
-    key: &str,
-) -> Result<Option<&'a str>> {
-    match obj.get(key) {
-        None | Some(Value::Null) => Ok(None),
-        Some(_) => get_str(n, path, obj, key).map(Some),
-    }
-}
-
-fn number(n: &Names, field: &str, v: &Value) -> Result<f64> {
-    match v {
-        Value::Number(x) => {
-            let x = x
-                .as_f64()
-                .ok_or_else(|| n.err(field, "number out of f64 range"))?;
-            if x.is_finite() {
-                Ok(x)
-            } else {
-                Err(n.err(field, format!("expected a finite number, found {x}")))
-            }
-        }
-        // JSON has no NaN literal; a string "NaN"/"inf" is the usual way it sneaks in.
-        Value::String(s) => Err(n.err(
-            field,
-            format!("expected a finite number, found the string {s:?}"),
-        )),
-        other => Err(n.err(
-            field,
-            format!("expected a finite number, found {}", type_name(other)),
-        )),
-    }
-}
-
-fn get_vec<const N: usize>(
-    n: &Names,
-    path: &str,
-    obj: &Map<String, Value>,
-    key: &str,
-) -> Result<[f64; N]> {
-    let field = format!("{path}.{key}");
-    let arr = match obj.get(key) {
-        None => {
-            return Err(n.err(
-                field,
-                format!("missing field (expected an array of {N} numbers)"),
-            ));
-        }
-        Some(Value::Array(a)) => a,
-        Some(v) => {
-            return Err(n.err(
-                field,
-                format!("expected an array of {N} numbers, found {}", type_name(v)),
-            ));
-        }
-    };
-    if arr.len() != N {
-        return Err(n.err(field, format!("expected {N} numbers, found {}", arr.len())));
-    }
-    let mut out = [0.0; N];
-    for (i, v) in arr.iter().enumerate() {
-        out[i] = number(n, &format!("{field}[{i}]"), v)?;
-    }
-    Ok(out)
-}
-
-struct RawJoint {
-    kind: AxisKind,
-    axis: String,
-    direction: Vec3,
-    sign: f64,
-    stroke: (f64, f64),
-}
-
-struct RawBody {
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct BodyJson {
     name: String,
     parent: Option<String>,
-    offset: Vec3,
-    joint: Option<RawJoint>,
+    offset_mm: Option<[f64; 3]>,
+    joint: Option<Tagged<JointJson>>,
     motion_errors: Option<bool>,
+    #[serde(rename = "note")]
+    _note: Option<String>,
 }
 
-fn parse_joint(n: &Names, path: &str, v: &Value) -> Result<Option<RawJoint>> {
-    let obj = v
-        .as_object()
-        .ok_or_else(|| n.err(path, format!("expected an object, found {}", type_name(v))))?;
-    let ty = get_str(n, path, obj, "type")?;
-    let kind = match ty {
-        "fixed" => {
-            check_keys(n, path, obj, &["type"])?;
-            return Ok(None);
-        }
-        "linear" => AxisKind::Linear,
-        "rotary" => AxisKind::Rotary,
-        other => {
-            return Err(n.err(
-                format!("{path}.type"),
-                format!(
-                    "unknown joint type {other:?} (expected \"fixed\", \"linear\" or \"rotary\")"
-                ),
-            ));
-        }
-    };
-    let stroke_key = if kind == AxisKind::Linear {
-        "stroke_mm"
-    } else {
-        "stroke_deg"
-    };
-    check_keys(
-        n,
-        path,
-        obj,
-        &["type", "axis", "direction", "sign", stroke_key],
-    )?;
-    let axis = get_str(n, path, obj, "axis")?.to_string();
-    if axis.is_empty() || axis.contains(char::is_whitespace) || axis.contains('.') {
-        return Err(n.err(
-            format!("{path}.axis"),
-            format!("axis name {axis:?} must be non-empty, without spaces or dots"),
-        ));
-    }
-    let d = get_vec::<3>(n, path, obj, "direction")?;
-    let d = Vec3::new(d[0], d[1], d[2]);
-    let norm = d.norm();
-    if norm < 1e-9 {
-        return Err(n.err(
-            format!("{path}.direction"),
-            format!(
-                "zero-length direction {:?} (expected a non-zero 3-vector)",
-                [d.x, d.y, d.z]
-            ),
-        ));
-    }
-    let sign = match obj.get("sign") {
-        None => {
-            return Err(n.err(
-                format!("{path}.sign"),
-                "missing field (expected 1 or -1: the body moves by sign·q along/about direction)",
-            ));
-        }
-        Some(v) => number(n, &format!("{path}.sign"), v)?,
-    };
-    if sign != 1.0 && sign != -1.0 {
-        return Err(n.err(
-            format!("{path}.sign"),
-            format!("expected 1 or -1, found {sign}"),
-        ));
-    }
-    let s = get_vec::<2>(n, path, obj, stroke_key)?;
-    if s[0] > s[1] {
-        return Err(n.err(
-            format!("{path}.{stroke_key}"),
-            format!(
-                "expected [min, max] with min <= max, found [{}, {}]",
-                s[0], s[1]
-            ),
-        ));
-    }
-    let stroke = if kind == AxisKind::Rotary {
-        (s[0].to_radians(), s[1].to_radians())
-    } else {
-        (s[0], s[1])
-    };
-    Ok(Some(RawJoint {
-        kind,
-        axis,
-        direction: d / norm,
-        sign,
-        stroke,
-    }))
+#[derive(Deserialize)]
+#[serde(rename_all = "snake_case", deny_unknown_fields)]
+enum JointJson {
+    Fixed {},
+    Linear {
+        axis: String,
+        direction: [f64; 3],
+        sign: f64,
+        stroke_mm: [f64; 2],
+    },
+    Rotary {
+        axis: String,
+        direction: [f64; 3],
+        sign: f64,
+        stroke_deg: [f64; 2],
+    },
 }
 
-fn parse_body(n: &Names, i: usize, v: &Value) -> Result<RawBody> {
-    let path = format!("bodies[{i}]");
-    let obj = v
-        .as_object()
-        .ok_or_else(|| n.err(&path, format!("expected an object, found {}", type_name(v))))?;
-    check_keys(
-        n,
-        &path,
-        obj,
-        &[
-            "name",
-            "parent",
-            "offset_mm",
-            "joint",
-            "motion_errors",
-            "note",
-        ],
-    )?;
-    let name = get_str(n, &path, obj, "name")?.to_string();
-    if name.is_empty() || name.contains(char::is_whitespace) || name.contains('.') {
-        return Err(n.err(
-            format!("{path}.name"),
-            format!("body name {name:?} must be non-empty, without spaces or dots"),
-        ));
-    }
-    let parent = if i == 0 {
-        match obj.get("parent") {
-            None | Some(Value::Null) => None,
-            Some(_) => {
-                return Err(n.err(
-                    format!("{path}.parent"),
-                    "the first body is the bed and has no parent (expected null or no field)",
-                ));
-            }
-        }
-    } else {
-        match obj.get("parent") {
-            None | Some(Value::Null) => {
-                return Err(n.err(
-                    format!("{path}.parent"),
-                    "missing field (expected the name of the parent body; only bodies[0], the bed, has none)",
-                ));
-            }
-            Some(_) => Some(get_str(n, &path, obj, "parent")?.to_string()),
-        }
-    };
-    let offset = if i == 0 && !obj.contains_key("offset_mm") {
-        Vec3::zeros()
-    } else {
-        let o = get_vec::<3>(n, &path, obj, "offset_mm")?;
-        Vec3::new(o[0], o[1], o[2])
-    };
-    if i == 0 && offset != Vec3::zeros() {
-        return Err(n.err(
-            format!("{path}.offset_mm"),
-            "the bed defines the machine frame; its offset must be [0, 0, 0]",
-        ));
-    }
-    let joint = match obj.get("joint") {
-        None | Some(Value::Null) => None,
-        Some(j) => parse_joint(n, &format!("{path}.joint"), j)?,
-    };
-    if i == 0 && joint.is_some() {
-        return Err(n.err(
-            format!("{path}.joint"),
-            "the bed cannot have a moving joint",
-        ));
-    }
-    if let Some(note) = obj.get("note") {
-        if !note.is_string() {
-            return Err(n.err(format!("{path}.note"), "expected a string"));
-        }
-    }
-    let motion_errors = match obj.get("motion_errors") {
-        None | Some(Value::Null) => None,
-        Some(Value::Bool(b)) => Some(*b),
-        Some(v) => {
-            return Err(n.err(
-                format!("{path}.motion_errors"),
-                format!("expected a boolean, found {}", type_name(v)),
-            ));
-        }
-    };
-    Ok(RawBody {
-        name,
-        parent,
-        offset,
-        joint,
-        motion_errors,
-    })
-}
+/// Largest length in a machine file, mm (10 km: beyond it a number is a typo, not a machine).
+const MAX_LENGTH_MM: f64 = 1e7;
+/// Largest rotary stroke end, degrees (about 2 800 turns).
+const MAX_ANGLE_DEG: f64 = 1e6;
 
 impl Machine {
     /// Parse and validate a machine description (`"format": "mte-machine/1"`).
     ///
     /// # Errors
     /// [`KinError::Json`] for malformed JSON; [`KinError::Field`] naming the field for a
-    /// missing field, wrong type, NaN/non-finite number, zero-length direction, unknown
-    /// body or axis name, duplicate names, or a cycle in the topology.
+    /// missing or unknown field, wrong type, a number beyond a machine's size, zero-length
+    /// direction, unknown body or axis name, duplicate names, or a cycle in the topology.
     ///
     /// ```
     /// use mte_kinematics::Machine;
@@ -513,12 +250,13 @@ impl Machine {
         Self::parse(s, "<string>")
     }
 
-    /// Read and parse a machine file; errors name the file.
+    /// Read and parse a machine file (a regular file; a UTF-8 byte-order mark is dropped);
+    /// errors name the file.
     ///
     /// # Errors
     /// [`KinError::Io`] if the file cannot be read, otherwise as [`Machine::from_json_str`].
     pub fn from_file(p: &Path) -> Result<Machine> {
-        let text = std::fs::read_to_string(p).map_err(|e| KinError::Io {
+        let text = mte_linalg::text::read_text(p).map_err(|e| KinError::Io {
             path: p.display().to_string(),
             message: e.to_string(),
         })?;
@@ -526,106 +264,175 @@ impl Machine {
     }
 
     pub(crate) fn parse(s: &str, src: &str) -> Result<Machine> {
-        let n = Names {
-            src: src.to_string(),
+        let err = |field: &str, message: String| KinError::Field {
+            source_name: src.to_string(),
+            field: if field.is_empty() { "(root)" } else { field }.to_string(),
+            message,
         };
-        let root: Value = serde_json::from_str(s).map_err(|e| KinError::Json {
+        let root = json::parse(s).map_err(|e| KinError::Json {
             source_name: src.to_string(),
             line: e.line(),
             column: e.column(),
             message: e.to_string(),
         })?;
-        let obj = root.as_object().ok_or_else(|| {
-            n.err(
-                "(root)",
-                format!("expected an object, found {}", type_name(&root)),
-            )
-        })?;
-        check_keys(
-            &n,
-            "(root)",
-            obj,
-            &[
-                "format",
-                "name",
-                "description",
-                "source",
+        let file: MachineJson = json::check_format(&root, FORMAT)
+            .and_then(|()| json::from_value(&root))
+            .map_err(|e| err(&e.path, e.message))?;
+        let raw = &file.bodies;
+        if raw.len() < 2 {
+            return Err(err(
                 "bodies",
-                "tool",
-                "workpiece",
-                "axis_order",
-            ],
-        )
-        .map_err(|e| match e {
-            KinError::Field {
-                source_name,
-                field,
-                message,
-            } => KinError::Field {
-                source_name,
-                field: field.trim_start_matches("(root).").to_string(),
-                message,
-            },
-            e => e,
-        })?;
-        let format = get_str(&n, "", obj, "format").map_err(|_| {
-            n.err(
-                "format",
-                format!("missing or not a string (expected \"{FORMAT}\")"),
-            )
-        })?;
-        if format != FORMAT {
-            return Err(n.err(
-                "format",
-                format!("unsupported format {format:?} (expected \"{FORMAT}\")"),
+                "expected at least the bed and one more body".into(),
             ));
         }
-        let strip = |e: KinError| match e {
-            KinError::Field {
-                source_name,
-                field,
-                message,
-            } => KinError::Field {
-                source_name,
-                field: field.trim_start_matches('.').to_string(),
-                message,
-            },
-            e => e,
-        };
-        let name = get_str(&n, "", obj, "name").map_err(strip)?.to_string();
-        let description = get_opt_str(&n, "", obj, "description")
-            .map_err(strip)?
-            .unwrap_or("")
-            .to_string();
-        get_opt_str(&n, "", obj, "source").map_err(strip)?;
-        let bodies_v = match obj.get("bodies") {
-            None => return Err(n.err("bodies", "missing field (expected an array of bodies)")),
-            Some(Value::Array(a)) => a,
-            Some(v) => {
-                return Err(n.err(
-                    "bodies",
-                    format!("expected an array, found {}", type_name(v)),
+        let name_ok =
+            |n: &str| !(n.is_empty() || n.contains(char::is_whitespace) || n.contains('.'));
+        let mut index: HashMap<&str, usize> = HashMap::new();
+        let mut axes: Vec<Axis> = Vec::new();
+        let mut axis_of_body = vec![None; raw.len()];
+        for (i, b) in raw.iter().enumerate() {
+            let path = format!("bodies[{i}]");
+            if !name_ok(&b.name) {
+                return Err(err(
+                    &format!("{path}.name"),
+                    format!(
+                        "body name {:?} must be non-empty, without spaces or dots",
+                        b.name
+                    ),
                 ));
             }
-        };
-        if bodies_v.len() < 2 {
-            return Err(n.err("bodies", "expected at least the bed and one more body"));
-        }
-        let raw: Vec<RawBody> = bodies_v
-            .iter()
-            .enumerate()
-            .map(|(i, v)| parse_body(&n, i, v))
-            .collect::<Result<_>>()?;
-
-        // names → indices
-        let mut index: HashMap<&str, usize> = HashMap::new();
-        for (i, b) in raw.iter().enumerate() {
             if let Some(prev) = index.insert(b.name.as_str(), i) {
-                return Err(n.err(
-                    format!("bodies[{i}].name"),
+                return Err(err(
+                    &format!("{path}.name"),
                     format!("duplicate body name {:?} (also bodies[{prev}])", b.name),
                 ));
             }
+            match (i, &b.parent, &b.offset_mm, &b.joint) {
+                (0, Some(_), _, _) => {
+                    return Err(err(
+                        &format!("{path}.parent"),
+                        "the first body is the bed and has no parent (expected null or no field)"
+                            .into(),
+                    ));
+                }
+                (0, _, Some(o), _) if *o != [0.0; 3] => {
+                    return Err(err(
+                        &format!("{path}.offset_mm"),
+                        "the bed defines the machine frame; its offset must be [0, 0, 0]".into(),
+                    ));
+                }
+                (0, _, _, Some(Tagged(JointJson::Linear { .. } | JointJson::Rotary { .. }))) => {
+                    return Err(err(
+                        &format!("{path}.joint"),
+                        "the bed cannot have a moving joint".into(),
+                    ));
+                }
+                (1.., None, _, _) => {
+                    return Err(err(
+                        &format!("{path}.parent"),
+                        "missing field (expected the name of the parent body; only bodies[0], the bed, has none)".into(),
+                    ));
+                }
+                (1.., _, None, _) => {
+                    return Err(err(
+                        &format!("{path}.offset_mm"),
+                        "missing field (expected an array of 3 numbers)".into(),
+                    ));
+                }
+                _ => {}
+            }
+            for (k, x) in b.offset_mm.unwrap_or_default().iter().enumerate() {
+                if x.abs() > MAX_LENGTH_MM {
+                    return Err(err(
+                        &format!("{path}.offset_mm[{k}]"),
+                        format!("{x} mm is beyond any machine (at most {MAX_LENGTH_MM:e} mm)"),
+                    ));
+                }
+            }
+            let (kind, axis, direction, sign, stroke, key, max) = match &b.joint {
+                None | Some(Tagged(JointJson::Fixed {})) => continue,
+                Some(Tagged(JointJson::Linear {
+                    axis,
+                    direction,
+                    sign,
+                    stroke_mm,
+                })) => (
+                    AxisKind::Linear,
+                    axis,
+                    direction,
+                    *sign,
+                    *stroke_mm,
+                    "stroke_mm",
+                    MAX_LENGTH_MM,
+                ),
+                Some(Tagged(JointJson::Rotary {
+                    axis,
+                    direction,
+                    sign,
+                    stroke_deg,
+                })) => (
+                    AxisKind::Rotary,
+                    axis,
+                    direction,
+                    *sign,
+                    *stroke_deg,
+                    "stroke_deg",
+                    MAX_ANGLE_DEG,
+                ),
+            };
+            let path = format!("{path}.joint");
+            if !name_ok(axis) {
+                return Err(err(
+                    &format!("{path}.axis"),
+                    format!("axis name {axis:?} must be non-empty, without spaces or dots"),
+                ));
+            }
+            if let Some(k) = axes.iter().position(|a| a.name == *axis) {
+                return Err(err(
+                    &format!("{path}.axis"),
+                    format!(
+                        "duplicate axis name {axis:?} (also bodies[{}].joint.axis)",
+                        axes[k].body
+                    ),
+                ));
+            }
+            // scaled by the largest component first: [1e300, 1e300, 0] is a direction too
+            let d = Vec3::from(*direction);
+            let scale = d.amax();
+            if scale < 1e-9 {
+                return Err(err(
+                    &format!("{path}.direction"),
+                    format!("zero-length direction {direction:?} (expected a non-zero 3-vector)"),
+                ));
+            }
+            if sign != 1.0 && sign != -1.0 {
+                return Err(err(
+                    &format!("{path}.sign"),
+                    format!("expected 1 or -1, found {sign}"),
+                ));
+            }
+            if stroke[0] > stroke[1] || stroke.iter().any(|x| x.abs() > max) {
+                return Err(err(
+                    &format!("{path}.{key}"),
+                    format!(
+                        "expected [min, max] with min <= max, each within ±{max:e}, found [{}, {}]",
+                        stroke[0], stroke[1]
+                    ),
+                ));
+            }
+            axis_of_body[i] = Some(axes.len());
+            axes.push(Axis {
+                name: axis.clone(),
+                kind,
+                body: i,
+                stroke: match kind {
+                    AxisKind::Linear => (stroke[0], stroke[1]),
+                    AxisKind::Rotary => (stroke[0].to_radians(), stroke[1].to_radians()),
+                },
+                direction: (d / scale).normalize(),
+                sign,
+                branch: Branch::Neither,
+            });
         }
         let known_bodies = || {
             raw.iter()
@@ -633,170 +440,125 @@ impl Machine {
                 .collect::<Vec<_>>()
                 .join(", ")
         };
+        let body_ref = |field: &str, name: &str| -> Result<usize> {
+            index.get(name).copied().ok_or_else(|| {
+                err(
+                    field,
+                    format!(
+                        "unknown body {name:?} (bodies: {}){}",
+                        known_bodies(),
+                        json::did_you_mean(name, raw.iter().map(|b| &b.name))
+                    ),
+                )
+            })
+        };
         let mut parents = vec![None; raw.len()];
-        for (i, b) in raw.iter().enumerate() {
-            if let Some(p) = &b.parent {
-                let pi = *index.get(p.as_str()).ok_or_else(|| {
-                    n.err(
-                        format!("bodies[{i}].parent"),
-                        format!("unknown body {p:?} (bodies: {})", known_bodies()),
-                    )
-                })?;
-                if pi == i {
-                    return Err(n.err(
-                        format!("bodies[{i}].parent"),
-                        format!("cycle in the topology: body {:?} is its own parent", b.name),
-                    ));
-                }
-                parents[i] = Some(pi);
+        for (i, b) in raw.iter().enumerate().skip(1) {
+            let pi = body_ref(
+                &format!("bodies[{i}].parent"),
+                b.parent.as_deref().unwrap_or(""),
+            )?;
+            if pi == i {
+                return Err(err(
+                    &format!("bodies[{i}].parent"),
+                    format!("cycle in the topology: body {:?} is its own parent", b.name),
+                ));
             }
+            parents[i] = Some(pi);
         }
         // cycle detection: every body must reach the bed within len steps
         for i in 0..raw.len() {
             let mut j = i;
-            let mut path = vec![raw[i].name.clone()];
-            let mut steps = 0;
+            let mut path = vec![raw[i].name.as_str()];
             while let Some(p) = parents[j] {
                 j = p;
-                path.push(raw[j].name.clone());
-                steps += 1;
-                if steps > raw.len() {
-                    let cyc: Vec<_> = path.iter().take(raw.len() + 1).cloned().collect();
-                    return Err(n.err(
-                        format!("bodies[{i}].parent"),
+                path.push(&raw[j].name);
+                if path.len() > raw.len() + 1 {
+                    path.pop();
+                    return Err(err(
+                        &format!("bodies[{i}].parent"),
                         format!(
                             "cycle in the topology: {} … never reaches the bed {:?}",
-                            cyc.join(" → "),
+                            path.join(" → "),
                             raw[0].name
                         ),
                     ));
                 }
             }
         }
-        let body_ref = |key: &str| -> Result<usize> {
-            let nm = get_str(&n, "", obj, key).map_err(strip)?;
-            index.get(nm).copied().ok_or_else(|| {
-                n.err(
-                    key,
-                    format!("unknown body {nm:?} (bodies: {})", known_bodies()),
-                )
-            })
-        };
-        let tool = body_ref("tool")?;
-        let workpiece = body_ref("workpiece")?;
+        let tool = body_ref("tool", &file.tool)?;
+        let workpiece = body_ref("workpiece", &file.workpiece)?;
         if tool == workpiece {
-            return Err(n.err("tool", "tool and workpiece must be different bodies"));
+            return Err(err(
+                "tool",
+                "tool and workpiece must be different bodies".into(),
+            ));
         }
 
-        // axes in body order, then reorder by axis_order
-        let mut axes: Vec<Axis> = Vec::new();
-        let mut axis_body_field: Vec<String> = Vec::new();
-        for (i, b) in raw.iter().enumerate() {
-            if let Some(j) = &b.joint {
-                if let Some(k) = axes.iter().position(|a| a.name == j.axis) {
-                    return Err(n.err(
-                        format!("bodies[{i}].joint.axis"),
+        // axes in body order, then reordered by axis_order
+        let mut order: Vec<usize> = (0..axes.len()).collect();
+        if let Some(names) = &file.axis_order {
+            let known = axes.iter().map(|a| a.name.as_str()).collect::<Vec<_>>();
+            order.clear();
+            for (k, nm) in names.iter().enumerate() {
+                let pos = axes.iter().position(|a| a.name == *nm).ok_or_else(|| {
+                    err(
+                        &format!("axis_order[{k}]"),
                         format!(
-                            "duplicate axis name {:?} (also {})",
-                            j.axis, axis_body_field[k]
+                            "unknown axis {nm:?} (machine axes: {}){}",
+                            known.join(", "),
+                            json::did_you_mean(nm, &known)
                         ),
-                    ));
-                }
-                axes.push(Axis {
-                    name: j.axis.clone(),
-                    kind: j.kind,
-                    body: i,
-                    stroke: j.stroke,
-                    direction: j.direction,
-                    sign: j.sign,
-                    branch: Branch::Neither,
-                });
-                axis_body_field.push(format!("bodies[{i}].joint.axis"));
-            }
-        }
-        if let Some(order) = obj.get("axis_order") {
-            let arr = order.as_array().ok_or_else(|| {
-                n.err(
-                    "axis_order",
-                    format!(
-                        "expected an array of axis names, found {}",
-                        type_name(order)
-                    ),
-                )
-            })?;
-            let known = axes
-                .iter()
-                .map(|a| a.name.as_str())
-                .collect::<Vec<_>>()
-                .join(", ");
-            let mut ordered = Vec::with_capacity(axes.len());
-            for (k, v) in arr.iter().enumerate() {
-                let nm = v.as_str().ok_or_else(|| {
-                    n.err(
-                        format!("axis_order[{k}]"),
-                        format!("expected an axis name, found {}", type_name(v)),
                     )
                 })?;
-                let pos = axes.iter().position(|a| a.name == nm).ok_or_else(|| {
-                    n.err(
-                        format!("axis_order[{k}]"),
-                        format!("unknown axis {nm:?} (machine axes: {known})"),
-                    )
-                })?;
-                if ordered.contains(&pos) {
-                    return Err(n.err(
-                        format!("axis_order[{k}]"),
-                        format!("axis {nm:?} listed twice"),
+                if let Some(prev) = order.iter().position(|&p| p == pos) {
+                    return Err(err(
+                        &format!("axis_order[{k}]"),
+                        format!("axis {nm:?} listed twice (also axis_order[{prev}])"),
                     ));
                 }
-                ordered.push(pos);
+                order.push(pos);
             }
-            if ordered.len() != axes.len() {
+            if order.len() != axes.len() {
                 let missing: Vec<_> = (0..axes.len())
-                    .filter(|p| !ordered.contains(p))
-                    .map(|p| axes[p].name.clone())
+                    .filter(|p| !order.contains(p))
+                    .map(|p| axes[p].name.as_str())
                     .collect();
-                return Err(n.err(
+                return Err(err(
                     "axis_order",
                     format!("axes missing from axis_order: {}", missing.join(", ")),
                 ));
             }
-            axes = ordered.into_iter().map(|p| axes[p].clone()).collect();
         }
-
-        let bodies: Vec<Body> = raw
+        let bodies = raw
             .iter()
             .enumerate()
             .map(|(i, b)| {
-                let joint = match &b.joint {
+                let joint = match axis_of_body[i] {
                     None => Joint::Fixed,
-                    Some(j) => Joint::Axis(
-                        axes.iter()
-                            .position(|a| a.name == j.axis)
-                            .expect("axis registered above"),
-                    ),
+                    Some(a) => Joint::Axis(order.iter().position(|&p| p == a).expect("ordered")),
                 };
-                Body {
+                if joint != Joint::Fixed && b.motion_errors == Some(false) {
+                    return Err(err(
+                        &format!("bodies[{i}].motion_errors"),
+                        "a moving body always has motion-error slots (expected true or no field)"
+                            .into(),
+                    ));
+                }
+                Ok(Body {
                     name: b.name.clone(),
                     parent: parents[i],
-                    offset_mm: b.offset,
+                    offset_mm: Vec3::from(b.offset_mm.unwrap_or_default()),
                     joint,
-                    motion_errors: b.motion_errors.unwrap_or(b.joint.is_some()),
+                    motion_errors: b.motion_errors.unwrap_or(joint != Joint::Fixed),
                     branch: Branch::Neither,
-                }
+                })
             })
-            .collect();
-        for (i, b) in bodies.iter().enumerate() {
-            if matches!(b.joint, Joint::Axis(_)) && !b.motion_errors {
-                return Err(n.err(
-                    format!("bodies[{i}].motion_errors"),
-                    "a moving body always has motion-error slots (expected true or no field)",
-                ));
-            }
-        }
+            .collect::<Result<Vec<Body>>>()?;
+        let axes = order.iter().map(|&p| axes[p].clone()).collect();
         Ok(Machine::build(
-            name,
-            description,
+            file.name,
+            file.description.unwrap_or_default(),
             bodies,
             axes,
             tool,

@@ -570,3 +570,120 @@ mod bad_files {
         }
     }
 }
+
+/// The input contract of machine files (issue #20): a BOM, unknown fields, magnitudes, duplicates.
+mod input_contract {
+    use super::*;
+
+    fn base() -> serde_json::Value {
+        serde_json::from_str(Machine::library_json("seed003-ac-table").unwrap()).unwrap()
+    }
+
+    fn msg(v: &serde_json::Value) -> String {
+        Machine::from_json_str(&v.to_string())
+            .unwrap_err()
+            .to_string()
+    }
+
+    #[test]
+    fn bom_is_accepted_in_files_and_strings() {
+        let text = Machine::library_json("seed004-3axis").unwrap();
+        let dir = std::env::temp_dir().join(format!("mte-kin-bom-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("m.json");
+        std::fs::write(&path, format!("\u{feff}{text}")).unwrap();
+        assert_eq!(Machine::from_file(&path).unwrap().name(), "seed004-3axis");
+        assert!(Machine::from_json_str(&format!("\u{feff}{text}")).is_ok());
+        // a directory is not a machine file
+        let err = Machine::from_file(&dir).unwrap_err().to_string();
+        assert!(err.contains("not a regular file"), "{err}");
+        std::fs::remove_dir_all(&dir).ok();
+    }
+
+    #[test]
+    fn unknown_fields_are_rejected_with_the_closest_name() {
+        let mut v = base();
+        v["bodies"][2]["ofset_mm"] = serde_json::json!([0, 0, 0]);
+        let m = msg(&v);
+        assert!(
+            m.contains("<string>: field `bodies[2].ofset_mm`")
+                && m.contains("unknown field")
+                && m.contains("did you mean `offset_mm`?"),
+            "{m}"
+        );
+        let mut v = base();
+        v["bodies"][1]["joint"]["type"] = "lineer".into();
+        let m = msg(&v);
+        assert!(
+            m.contains("`bodies[1].joint.type`") && m.contains("did you mean `linear`?"),
+            "{m}"
+        );
+        let mut v = base();
+        v["bodies"][1]["parent"] = "bd".into();
+        let m = msg(&v);
+        assert!(m.contains("did you mean `bed`?"), "{m}");
+        // a fixed joint has no other fields
+        let mut v = base();
+        v["bodies"][7]["joint"] = serde_json::json!({"type": "fixed", "axis": "Q"});
+        let m = msg(&v);
+        assert!(
+            m.contains("`bodies[7].joint.axis`") && m.contains("unknown field"),
+            "{m}"
+        );
+    }
+
+    #[test]
+    fn huge_direction_is_normalised_safely() {
+        let mut v = base();
+        v["bodies"][1]["joint"]["direction"] = serde_json::json!([1e300, 1e300, 0]);
+        let m = Machine::from_json_str(&v.to_string()).unwrap();
+        let d = m.axes()[m.axis_index("X").unwrap()].direction;
+        approx::assert_relative_eq!(d, Vec3::new(1.0, 1.0, 0.0).normalize(), epsilon = 1e-15);
+    }
+
+    #[test]
+    fn impossible_magnitudes_are_rejected() {
+        let mut v = base();
+        v["bodies"][2]["offset_mm"][0] = 2e7.into();
+        let m = msg(&v);
+        assert!(
+            m.contains("`bodies[2].offset_mm[0]`") && m.contains("20000000 mm is beyond"),
+            "{m}"
+        );
+        let mut v = base();
+        v["bodies"][1]["joint"]["stroke_mm"] = serde_json::json!([-1e9, 100]);
+        let m = msg(&v);
+        assert!(
+            m.contains("`bodies[1].joint.stroke_mm`") && m.contains("-1000000000"),
+            "{m}"
+        );
+    }
+
+    #[test]
+    fn duplicates_name_both_occurrences() {
+        let mut v = base();
+        let axis = v["bodies"][1]["joint"]["axis"].clone();
+        v["bodies"][2]["joint"]["axis"] = axis;
+        let m = msg(&v);
+        assert!(
+            m.contains("`bodies[2].joint.axis`")
+                && m.contains("duplicate axis name")
+                && m.contains("also bodies[1].joint.axis"),
+            "{m}"
+        );
+        let mut v = base();
+        v["bodies"][3]["name"] = v["bodies"][1]["name"].clone();
+        let m = msg(&v);
+        assert!(
+            m.contains("`bodies[3].name`") && m.contains("also bodies[1]"),
+            "{m}"
+        );
+        let mut v = base();
+        v["axis_order"][2] = v["axis_order"][0].clone();
+        let m = msg(&v);
+        assert!(
+            m.contains("`axis_order[2]`") && m.contains("listed twice (also axis_order[0])"),
+            "{m}"
+        );
+    }
+}

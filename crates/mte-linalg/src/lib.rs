@@ -9,6 +9,7 @@ pub use geometry::{
     quaternion_from_rotation_vector, se3, skew, so3, unskew,
 };
 
+pub mod json;
 pub mod stats;
 pub mod text;
 
