@@ -526,18 +526,8 @@ fn error_set_reader(names_file: bool) -> Reader {
     }
 }
 
-/// No panic in the error-set reader (10 000 cases pass).
-#[test]
-fn error_sets_do_not_panic() {
-    fuzz(error_set_reader(false));
-}
-
 /// No panic, and every error names the file.
 #[test]
-#[ignore = "mte-errors errorset.rs (being rewritten with serde derive, not this branch's): a \
-            distribution error does not name the file, e.g. seed003-tolerances.json with a \
-            sigma level replaced by -1 gives `parameters[17] (δxa).distribution (tolerance \
-            distribution): tolerance 0.015 and sigma level -1 must be > 0`"]
 fn error_sets() {
     fuzz(error_set_reader(true));
 }

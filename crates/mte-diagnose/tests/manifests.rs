@@ -66,3 +66,31 @@ fn a_missing_format_says_which_are_read() {
         "{err}"
     );
 }
+
+/// An absurd coordinate in 3-D points is an input error naming line and column (it used to
+/// send the pose fit's SVD into an endless loop).
+#[test]
+fn an_absurd_point_is_an_error_not_a_hang() {
+    let src =
+        PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../fixtures/datasets/c-stage-points");
+    let dir = std::env::temp_dir().join(format!("mte-manifests-{}-points", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    for f in ["manifest.json", "machine.json"] {
+        std::fs::copy(src.join(f), dir.join(f)).unwrap();
+    }
+    let csv = std::fs::read_to_string(src.join("points.csv")).unwrap();
+    let mut lines: Vec<String> = csv.lines().map(String::from).collect();
+    let mut fields: Vec<String> = lines[3].split(',').map(String::from).collect();
+    let last = fields.len() - 1;
+    fields[last] = "1e300".into();
+    lines[3] = fields.join(",");
+    std::fs::write(dir.join("points.csv"), lines.join("\n")).unwrap();
+    let err = mte_diagnose::load(&dir.join("manifest.json"))
+        .err()
+        .unwrap()
+        .to_string();
+    assert!(
+        err.contains("points.csv") && err.contains("line 4") && err.contains("point_z_mm"),
+        "{err}"
+    );
+}

@@ -405,7 +405,16 @@ impl ErrorSet {
                     ),
                 ));
             }
-            entries.push(p.entry(source_name, base_dir, i)?);
+            // Settings that are wrong as a whole (units, distributions) name the file too.
+            entries.push(p.entry(source_name, base_dir, i).map_err(|e| match e {
+                Error::Unit {
+                    field,
+                    unit,
+                    message,
+                } => err(field, format!("unit `{unit}` does not fit: {message}")),
+                Error::Invalid { what, message } => err(what, message),
+                other => other,
+            })?);
         }
         Ok(ErrorSet {
             name: set.name.unwrap_or_else(|| source_name.to_string()),

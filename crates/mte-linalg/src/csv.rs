@@ -149,6 +149,21 @@ impl CsvTable {
         Err(self.error(*line, format!("column `{}`: `{s}` {what}", self.headers[c])))
     }
 
+    /// Every number of column `c`, each checked as [`CsvTable::number_within`].
+    ///
+    /// # Errors
+    /// The first field that is not a number or is out of range, with its line.
+    pub fn numbers_within(
+        &self,
+        c: usize,
+        max_abs: f64,
+        meaning: &str,
+    ) -> Result<Vec<f64>, CsvError> {
+        (0..self.len())
+            .map(|r| self.number_within(r, c, max_abs, meaning))
+            .collect()
+    }
+
     /// The number in row `r`, column `c`, which must be physically possible: |value| below
     /// `max_abs`, which `meaning` explains (e.g. `"a deviation of 1 m (10^6 µm) or more is not a
     /// measured positioning error"`).

@@ -2,6 +2,7 @@
 
 use mte_linalg::{DMat, DVec};
 
+use super::machine::{LINEAR_LIMIT_MM, ROTARY_LIMIT_DEG, read_times};
 use crate::Result;
 use crate::candidate::{SlotEffect, SlotRole};
 use crate::data::{Observations, Variable, VariableKind};
@@ -66,7 +67,19 @@ impl AxisRuns {
                 detail: "no observations".into(),
             });
         }
-        let mut position = table.numbers(pos_col)?;
+        let mut position = if rotary {
+            table.numbers_within(
+                pos_col,
+                ROTARY_LIMIT_DEG,
+                "a rotary axis command of 10⁶° or more is no machine position",
+            )?
+        } else {
+            table.numbers_within(
+                pos_col,
+                LINEAR_LIMIT_MM,
+                "a linear axis command of 10 km or more is no machine position",
+            )?
+        };
         if rotary {
             position.iter_mut().for_each(|p| *p = p.to_radians());
         }
@@ -84,7 +97,12 @@ impl AxisRuns {
                 )
                 .into());
         }
-        let deviation = table.numbers(table.require(deviation_column)?)?;
+        // 1 m (10⁶ µm) or 10⁶″ (about 280°) is no positioning deviation.
+        let deviation = table.numbers_within(
+            table.require(deviation_column)?,
+            1e6,
+            "a deviation of 10⁶ (1 m, or 280°) or more is not a measured positioning error",
+        )?;
         let stated_noise = match (rotary, manifest.noise_um, manifest.noise_arcsec) {
             (false, noise, None) | (true, None, noise) => noise,
             (false, _, Some(_)) => {
@@ -141,11 +159,11 @@ impl AxisRuns {
                 values: direction,
             },
         ];
-        if let Some(c) = table.column("t_s") {
+        if let Some(t) = read_times(&table)? {
             variables.push(Variable {
                 name: "t".into(),
                 kind: VariableKind::Time,
-                values: table.numbers(c)?,
+                values: t,
             });
         }
         let observations = Observations {

@@ -306,15 +306,44 @@ pub(crate) fn read_axes(machine: &Machine, table: &Table) -> Result<Vec<Vec<f64>
         .map(|axis| {
             let lower = axis.name.to_lowercase();
             match axis.kind {
-                AxisKind::Linear => Ok(table.numbers(table.require(&format!("{lower}_mm"))?)?),
+                AxisKind::Linear => Ok(table.numbers_within(
+                    table.require(&format!("{lower}_mm"))?,
+                    LINEAR_LIMIT_MM,
+                    "a linear axis command of 10 km or more is no machine position",
+                )?),
                 AxisKind::Rotary => Ok(table
-                    .numbers(table.require(&format!("{lower}_deg"))?)?
+                    .numbers_within(
+                        table.require(&format!("{lower}_deg"))?,
+                        ROTARY_LIMIT_DEG,
+                        "a rotary axis command of 10⁶° or more is no machine position",
+                    )?
                     .into_iter()
                     .map(f64::to_radians)
                     .collect()),
             }
         })
         .collect()
+}
+
+/// Largest linear axis command (mm) and rotary axis command (°) a dataset may hold.
+pub(crate) const LINEAR_LIMIT_MM: f64 = 1e7;
+/// See [`LINEAR_LIMIT_MM`].
+pub(crate) const ROTARY_LIMIT_DEG: f64 = 1e6;
+
+/// Reads the optional time column `t_s` (below 10⁹ s, about 30 years).
+pub(crate) fn read_times(table: &Table) -> Result<Option<Vec<f64>>> {
+    table
+        .column("t_s")
+        .map(|c| {
+            table
+                .numbers_within(
+                    c,
+                    1e9,
+                    "a time of 10⁹ s (30 years) or more is not a measuring time",
+                )
+                .map_err(Into::into)
+        })
+        .transpose()
 }
 
 /// The location errors of every rotary axis (ISO 230-7) across its line: the position of the

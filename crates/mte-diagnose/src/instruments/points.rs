@@ -21,7 +21,9 @@
 use mte_kinematics::Machine;
 use mte_linalg::{DMat, DVec, Mat3, Vec3};
 
-use super::machine::{axis_variables, load_machine, location_names, read_axes, slot_effects};
+use super::machine::{
+    axis_variables, load_machine, location_names, read_axes, read_times, slot_effects,
+};
 use crate::Result;
 use crate::candidate::{BaseModelSpec, SlotEffect, SlotRole};
 use crate::data::{Observations, Variable, VariableKind};
@@ -117,7 +119,13 @@ impl Points {
             ];
             let v: Vec<Vec<f64>> = cols
                 .iter()
-                .map(|&c| table.numbers(c))
+                .map(|&c| {
+                    table.numbers_within(
+                        c,
+                        1e6,
+                        "a coordinate of 1 km or more is not a measured point",
+                    )
+                })
                 .collect::<std::result::Result<_, _>>()?;
             (0..rows).map(|r| [v[0][r], v[1][r], v[2][r]]).collect()
         };
@@ -178,11 +186,11 @@ impl Points {
             &machine,
             &axes.iter().map(|a| per_obs(a)).collect::<Vec<_>>(),
         );
-        if let Some(c) = table.column("t_s") {
+        if let Some(t) = read_times(&table)? {
             variables.push(Variable {
                 name: "t".into(),
                 kind: VariableKind::Time,
-                values: per_obs(&table.numbers(c)?),
+                values: per_obs(&t),
             });
         }
         let observations = Observations {
@@ -313,11 +321,13 @@ fn fit_nominal(
                 }
             }
         }
-        let svd = jac.clone().svd(true, true);
+        let fail = || "the instrument's pose could not be fitted (degenerate or absurd points)";
+        let svd = jac
+            .clone()
+            .try_svd(true, true, f64::EPSILON, 500)
+            .ok_or_else(fail)?;
         let tol = svd.singular_values.max() * 1e-10;
-        let step = svd
-            .solve(&res, tol)
-            .map_err(|e| format!("fitting the instrument's pose: {e}"))?;
+        let step = svd.solve(&res, tol).map_err(|_| fail())?;
         for (s, pose) in poses.iter_mut().enumerate() {
             let dt = Vec3::new(step[6 * s], step[6 * s + 1], step[6 * s + 2]);
             let w = Vec3::new(step[6 * s + 3], step[6 * s + 4], step[6 * s + 5]);
@@ -356,7 +366,9 @@ fn kabsch(a: &[Vec3], b: &[Vec3]) -> (Mat3, Vec3) {
     let h = a.iter().zip(b).fold(Mat3::zeros(), |h, (p, q)| {
         h + (p - ca) * (q - cb).transpose()
     });
-    let svd = h.svd(true, true);
+    let Some(svd) = h.try_svd(true, true, f64::EPSILON, 500) else {
+        return (Mat3::identity(), cb - ca);
+    };
     let (Some(u), Some(v_t)) = (svd.u, svd.v_t) else {
         return (Mat3::identity(), cb - ca);
     };

@@ -10,7 +10,7 @@ use mte_kinematics::Machine;
 use mte_linalg::{DMat, DVec, Vec3};
 use serde::Deserialize;
 
-use super::machine::{axis_variables, load_machine, read_axes, slot_effects};
+use super::machine::{axis_variables, load_machine, read_axes, read_times, slot_effects};
 use crate::Result;
 use crate::candidate::{SlotEffect, SlotRole};
 use crate::data::{Observations, Variable, VariableKind};
@@ -142,7 +142,12 @@ impl Tracker {
             observations.push(LengthObservation {
                 station,
                 target,
-                length_mm: lengths.number(r, cl)?,
+                length_mm: lengths.number_within(
+                    r,
+                    cl,
+                    1e6,
+                    "a tracker length of 1 km or more is not a measurement",
+                )?,
                 sigma_mm: noise_um * 1e-3,
             });
         }
@@ -178,8 +183,7 @@ impl Tracker {
             .map(|v| target_of.iter().map(|&j| v[j]).collect())
             .collect();
         let mut variables = axis_variables(&machine, &per_length);
-        if let Some(c) = targets.column("t_s") {
-            let t = targets.numbers(c)?;
+        if let Some(t) = read_times(&targets)? {
             variables.push(Variable {
                 name: "t".into(),
                 kind: VariableKind::Time,
