@@ -701,12 +701,7 @@ fn rtest_identify_on_one_test_of_one_setup_warns_the_design_cannot_separate() {
 #[test]
 fn rtest_manifest_duplicate_setup_and_huge_reading_are_named() {
     let d = scratch("rtest-files");
-    let fx = root().join("fixtures/rtest");
-    for f in ["seed002-two-positions.json", "seed002-two-positions.csv"] {
-        std::fs::copy(fx.join(f), d.join(f)).unwrap();
-    }
-    let man = d.join("seed002-two-positions.json");
-    let text = std::fs::read_to_string(&man).unwrap();
+    let (man, text) = two_positions_copy(&d);
     std::fs::write(&man, text.replace("\"Y-177\"", "\"Y+177\"")).unwrap();
     fails_with(
         &[
@@ -814,12 +809,7 @@ fn a_fifo_as_error_set_or_machine_is_refused_not_read() {
 #[test]
 fn rtest_identify_refuses_a_centring_outside_the_stroke() {
     let d = scratch("rtest-centring");
-    let fx = root().join("fixtures/rtest");
-    for f in ["seed002-two-positions.json", "seed002-two-positions.csv"] {
-        std::fs::copy(fx.join(f), d.join(f)).unwrap();
-    }
-    let man = d.join("seed002-two-positions.json");
-    let text = std::fs::read_to_string(&man).unwrap();
+    let (man, text) = two_positions_copy(&d);
     std::fs::write(&man, text.replace("\"Z\": -40.0", "\"Z\": -40000.0")).unwrap();
     fails_with(
         &[
@@ -837,4 +827,15 @@ fn rtest_identify_refuses_a_centring_outside_the_stroke() {
             "--allow-outside-stroke",
         ],
     );
+}
+
+/// Copies the bundled two-position R-test dataset into `d`: its manifest's path and text.
+fn two_positions_copy(d: &Path) -> (PathBuf, String) {
+    let fx = root().join("fixtures/rtest");
+    for f in ["seed002-two-positions.json", "seed002-two-positions.csv"] {
+        std::fs::copy(fx.join(f), d.join(f)).unwrap();
+    }
+    let man = d.join("seed002-two-positions.json");
+    let text = std::fs::read_to_string(&man).unwrap();
+    (man, text)
 }
