@@ -480,6 +480,7 @@ pub fn diagnose(
     {
         notes.push("no pose is measured twice: time-dependent effects (thermal drift) cannot be told from pose-dependent ones and were not tested".to_string());
     }
+    notes.extend(harmonic_families(&findings));
     let residual_series = residual_series(
         obs,
         &findings,
@@ -1138,6 +1139,56 @@ fn f_test(rss: f64, delta_rss: f64, k: usize, dof: usize) -> f64 {
 }
 
 /// The period or time constant of a term, with the quantity it is reported in.
+/// Periodic findings of one axis whose periods are the first's divided by 2, 3, …: harmonics of
+/// one periodic error that is not a sine (a sawtooth, a pitch error with a sharp profile), said
+/// in one sentence so the reader does not take them for independent causes.
+fn harmonic_families(findings: &[Finding]) -> Vec<String> {
+    let periodic: Vec<(&Finding, f64, f64)> = findings
+        .iter()
+        .filter_map(|f| {
+            let h = f.hyper_parameter.as_ref()?;
+            matches!(f.family, Family::Periodic { .. }).then_some((f, h.value, h.uncertainty))
+        })
+        .collect();
+    let mut notes = Vec::new();
+    let mut used = vec![false; periodic.len()];
+    for (i, &(f, p, u)) in periodic.iter().enumerate() {
+        if used[i] {
+            continue;
+        }
+        let mut members = vec![(1, f)];
+        for (j, &(g, q, v)) in periodic.iter().enumerate().skip(i + 1) {
+            if used[j] || g.exposed_by != f.exposed_by || q >= p {
+                continue;
+            }
+            let ratio = p / q;
+            let k = ratio.round();
+            // The ratio's uncertainty from both periods', and never tighter than 1 %.
+            let u_ratio = (ratio * ((u / p).powi(2) + (v / q).powi(2)).sqrt()).max(0.01 * ratio);
+            if k >= 2.0 && (ratio - k).abs() <= 2.0 * u_ratio {
+                members.push((k as usize, g));
+                used[j] = true;
+            }
+        }
+        if members.len() > 1 {
+            let names: Vec<String> = members
+                .iter()
+                .map(|(k, g)| format!("{} (harmonic {k})", g.name))
+                .collect();
+            let period = f
+                .hyper_parameter
+                .as_ref()
+                .map(|h| h.quantity.format(h.value, h.uncertainty))
+                .unwrap_or_default();
+            notes.push(format!(
+                "{} are one periodic error of period {period} that is not a sine (its harmonics): a sawtooth or sharp-profiled pitch error, not independent causes",
+                names.join(", ")
+            ));
+        }
+    }
+    notes
+}
+
 fn hyper_of(family: &Family, rotary: bool) -> Option<(f64, Quantity)> {
     match family {
         Family::Periodic { period } if rotary => Some((*period, Quantity::AxisAngle)),
