@@ -199,6 +199,28 @@ impl CsvTable {
         ))
     }
 
+    /// The distinct texts of column `c` in order of first appearance, and each row's index
+    /// among them (run ids, set-up ids).
+    ///
+    /// ```
+    /// use mte_linalg::csv::CsvTable;
+    /// let t = CsvTable::parse("run\nb\na\nb\n", "runs.csv").unwrap();
+    /// assert_eq!(t.groups(0), (vec!["b".to_string(), "a".to_string()], vec![0, 1, 0]));
+    /// ```
+    pub fn groups(&self, c: usize) -> (Vec<String>, Vec<usize>) {
+        let mut names: Vec<String> = Vec::new();
+        let index = (0..self.len())
+            .map(|r| {
+                let id = self.text(r, c);
+                names.iter().position(|s| s == id).unwrap_or_else(|| {
+                    names.push(id.to_string());
+                    names.len() - 1
+                })
+            })
+            .collect();
+        (names, index)
+    }
+
     /// The numbers of column `c`, every row.
     ///
     /// # Errors

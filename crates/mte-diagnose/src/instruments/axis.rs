@@ -132,17 +132,7 @@ impl AxisRuns {
                 }
             });
         }
-        let run_col = table.require("run")?;
-        let mut setup_names: Vec<String> = Vec::new();
-        let mut setup = Vec::with_capacity(n);
-        for r in 0..n {
-            let id = table.text(r, run_col);
-            let k = setup_names.iter().position(|s| s == id).unwrap_or_else(|| {
-                setup_names.push(id.to_string());
-                setup_names.len() - 1
-            });
-            setup.push(k);
-        }
+        let (setup_names, setup) = table.groups(table.require("run")?);
         let mut variables = vec![
             Variable {
                 name: axis.clone(),

@@ -38,6 +38,19 @@ pub(crate) fn axis_variables(machine: &Machine, values: &[Vec<f64>]) -> Vec<crat
         .collect()
 }
 
+/// The machine's axis values per observation, in the machine's axis order, from the
+/// observations' variables (which [`axis_variables`] made).
+pub(crate) fn axis_values(machine: &Machine, obs: &crate::Observations) -> Vec<Vec<f64>> {
+    machine
+        .axes()
+        .iter()
+        .map(|a| {
+            obs.variable(&a.name)
+                .map_or_else(|| vec![0.0; obs.len()], |v| v.values.clone())
+        })
+        .collect()
+}
+
 /// ISO 230-1 letter of component `k` (0–5): X, Y, Z, A, B, C.
 fn letter(k: usize) -> char {
     catalogue::component_letter(Component::ALL[k])

@@ -22,7 +22,7 @@ use mte_kinematics::Machine;
 use mte_linalg::{DMat, DVec, Mat3, Vec3};
 
 use super::machine::{
-    axis_variables, load_machine, location_names, read_axes, read_times, slot_effects,
+    axis_values, axis_variables, load_machine, location_names, read_axes, read_times, slot_effects,
 };
 use crate::Result;
 use crate::candidate::{BaseModelSpec, SlotEffect, SlotRole};
@@ -57,6 +57,8 @@ pub struct Points {
     observations: Observations,
     /// Commanded axes per row.
     q: Vec<Vec<f64>>,
+    /// The nominal tool frame in the workpiece frame per row (rotation, translation).
+    frames: Vec<(Mat3, Vec3)>,
     /// Set-up of each row.
     setup_of: Vec<usize>,
     setup_ids: Vec<String>,
@@ -111,7 +113,7 @@ impl Points {
         let q: Vec<Vec<f64>> = (0..rows)
             .map(|r| axes.iter().map(|a| a[r]).collect())
             .collect();
-        let measured: Vec<[f64; 3]> = {
+        let m: Vec<Vec3> = {
             let cols = [
                 table.require("point_x_mm")?,
                 table.require("point_y_mm")?,
@@ -127,19 +129,11 @@ impl Points {
                     )
                 })
                 .collect::<std::result::Result<_, _>>()?;
-            (0..rows).map(|r| [v[0][r], v[1][r], v[2][r]]).collect()
+            (0..rows)
+                .map(|r| Vec3::new(v[0][r], v[1][r], v[2][r]))
+                .collect()
         };
-        let setup_col = table.require("setup")?;
-        let mut setup_ids: Vec<String> = Vec::new();
-        let setup_of: Vec<usize> = (0..rows)
-            .map(|r| {
-                let id = table.text(r, setup_col);
-                setup_ids.iter().position(|s| s == id).unwrap_or_else(|| {
-                    setup_ids.push(id.to_string());
-                    setup_ids.len() - 1
-                })
-            })
-            .collect();
+        let (setup_ids, setup_of) = table.groups(table.require("setup")?);
         for (k, id) in setup_ids.iter().enumerate() {
             let count = setup_of.iter().filter(|&&s| s == k).count();
             if count < 3 {
@@ -160,10 +154,6 @@ impl Points {
                     g.translation.vector,
                 )
             })
-            .collect();
-        let m: Vec<Vec3> = measured
-            .iter()
-            .map(|p| Vec3::new(p[0], p[1], p[2]))
             .collect();
         let fit = fit_nominal(
             &frames,
@@ -224,23 +214,13 @@ impl Points {
                 side,
                 observations,
                 q,
+                frames,
                 setup_of,
                 setup_ids,
                 title,
             },
             manifest.base_model,
         ))
-    }
-
-    /// d x / d offset at a row: the tool's rotation in the workpiece frame (target on the tool),
-    /// or its inverse (target on the workpiece).
-    fn offset_jacobian(&self, row: usize) -> Mat3 {
-        let g = self.machine.tool_in_workpiece(&self.q[row], &[]);
-        let r = *g.rotation.to_rotation_matrix().matrix();
-        match self.side {
-            Side::Tool => r,
-            Side::Workpiece => r.transpose(),
-        }
     }
 }
 
@@ -249,6 +229,15 @@ struct NominalFit {
     poses: Vec<(Mat3, Vec3)>,
     offset: Vec3,
     x: Vec<Vec3>,
+}
+
+/// d x / d offset: the tool's rotation in the workpiece frame (target on the tool), or its
+/// inverse (target on the workpiece).
+fn offset_jacobian(frame: &(Mat3, Vec3), side: Side) -> Mat3 {
+    match side {
+        Side::Tool => frame.0,
+        Side::Workpiece => frame.0.transpose(),
+    }
 }
 
 /// The target's nominal position in the instrument side's frame, with the tool frame
@@ -309,11 +298,7 @@ fn fit_nominal(
                 }
             }
             if known.is_none() {
-                let (fr, _) = &frames[r];
-                let a = match side {
-                    Side::Tool => rot * fr,
-                    Side::Workpiece => rot * fr.transpose(),
-                };
+                let a = rot * offset_jacobian(&frames[r], side);
                 for i in 0..3 {
                     for j in 0..3 {
                         jac[(3 * r + i, 6 * n_setups + j)] = a[(i, j)];
@@ -346,13 +331,13 @@ fn fit_nominal(
             break;
         }
     }
-    if !res_finite(&poses) {
+    if !finite_poses(&poses) {
         return Err("the instrument's pose could not be fitted (the points are degenerate)".into());
     }
     Ok(NominalFit { poses, offset, x })
 }
 
-fn res_finite(poses: &[(Mat3, Vec3)]) -> bool {
+fn finite_poses(poses: &[(Mat3, Vec3)]) -> bool {
     poses
         .iter()
         .all(|(r, t)| r.iter().all(|v| v.is_finite()) && t.iter().all(|v| v.is_finite()))
@@ -397,16 +382,12 @@ impl ObservationModel for Points {
         let mut jac = DMat::zeros(6, machine.n_slots());
         for r in 0..rows {
             machine.jacobian_into(&self.q[r], &mut jac);
-            let g = machine.tool_in_workpiece(&self.q[r], &[]);
-            let (rot, tip) = (
-                *g.rotation.to_rotation_matrix().matrix(),
-                g.translation.vector,
-            );
+            let (rot, tip) = &self.frames[r];
             for j in 0..machine.n_slots() {
                 let dp = Vec3::new(jac[(0, j)], jac[(1, j)], jac[(2, j)]);
                 let dtheta = Vec3::new(jac[(3, j)], jac[(4, j)], jac[(5, j)]);
                 let dx = match self.side {
-                    Side::Tool => dp + dtheta.cross(&(rot * self.offset)),
+                    Side::Tool => dp + dtheta.cross(&(*rot * self.offset)),
                     Side::Workpiece => {
                         -(rot.transpose() * (dp + dtheta.cross(&(self.offset - tip))))
                     }
@@ -416,10 +397,8 @@ impl ObservationModel for Points {
                 }
             }
         }
-        let per_obs: Vec<Vec<f64>> = (0..machine.axes().len())
-            .map(|k| (0..n).map(|i| self.q[i / 3][k]).collect())
-            .collect();
-        let mut errors = slot_effects(machine, &s, &per_obs, None, &|_| None);
+        let axes_per_obs = axis_values(machine, &self.observations);
+        let mut errors = slot_effects(machine, &s, &axes_per_obs, None, &|_| None);
         // The tool's and the workpiece's set-up offsets are the target's offset and the
         // instrument's pose.
         errors.retain(|e| {
@@ -475,7 +454,11 @@ impl ObservationModel for Points {
             }
         }
         if self.offset_fitted {
-            let a: Vec<Mat3> = (0..rows).map(|r| self.offset_jacobian(r)).collect();
+            let a: Vec<Mat3> = self
+                .frames
+                .iter()
+                .map(|f| offset_jacobian(f, self.side))
+                .collect();
             for (k, letter) in ['x', 'y', 'z'].into_iter().enumerate() {
                 instrument.push(Term::single(
                     format!("target offset {letter}"),

@@ -10,7 +10,9 @@ use mte_kinematics::Machine;
 use mte_linalg::{DMat, DVec, Vec3};
 use serde::Deserialize;
 
-use super::machine::{axis_variables, load_machine, read_axes, read_times, slot_effects};
+use super::machine::{
+    axis_values, axis_variables, load_machine, read_axes, read_times, slot_effects,
+};
 use crate::Result;
 use crate::candidate::{SlotEffect, SlotRole};
 use crate::data::{Observations, Variable, VariableKind};
@@ -270,11 +272,7 @@ impl ObservationModel for Tracker {
             s.row_mut(k)
                 .copy_from(&(u[k].transpose() * &tip[self.target_of[k]]));
         }
-        let axes_per_obs: Vec<Vec<f64>> = self
-            .axes
-            .iter()
-            .map(|v| self.target_of.iter().map(|&j| v[j]).collect())
-            .collect();
+        let axes_per_obs = axis_values(machine, &self.observations);
         let mut errors = slot_effects(machine, &s, &axes_per_obs, None, &|_| None);
         errors.retain(|e| {
             !matches!(
