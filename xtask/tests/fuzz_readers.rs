@@ -343,31 +343,10 @@ fn tracker_files() -> Vec<(String, Vec<u8>)> {
         1,
     )
     .unwrap();
-    let n = &sim.network;
-    let mut s = String::from("id,x_mm,y_mm,z_mm,dead_path_mm,dead_path\n");
-    for st in &n.stations {
-        s += &format!(
-            "{},{},{},{},{},free\n",
-            st.id, st.position_mm.x, st.position_mm.y, st.position_mm.z, st.dead_path_mm
-        );
-    }
-    let mut t = String::from("id,x_mm,y_mm,z_mm\n");
-    for tg in &n.targets {
-        t += &format!(
-            "{},{},{},{}\n",
-            tg.id, tg.nominal_mm.x, tg.nominal_mm.y, tg.nominal_mm.z
-        );
-    }
-    let mut l = String::from("station,target,length_mm,sigma_um\n");
-    for o in n.observations.iter().take(40) {
-        l += &format!(
-            "{},{},{:.9},{:.6}\n",
-            n.stations[o.station].id,
-            n.targets[o.target].id,
-            o.length_mm,
-            o.sigma_mm * 1e3
-        );
-    }
+    // 40 lengths keep each case fast.
+    let mut n = sim.network;
+    n.observations.truncate(40);
+    let (s, t, l) = mte_metrology::io::network_to_csv(&n);
     vec![
         ("stations.csv".into(), s.into_bytes()),
         ("targets.csv".into(), t.into_bytes()),

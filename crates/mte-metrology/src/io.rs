@@ -48,6 +48,57 @@ fn unique_ids(c: &CsvTable, col: usize, kind: &str) -> Result<()> {
     Ok(())
 }
 
+/// The three CSV texts of a network, as [`network_from_csv`] reads them: stations (with their
+/// dead path and whether it is free), nominal targets, lengths with their σ.
+///
+/// ```
+/// use mte_metrology::io::{network_from_csv, network_to_csv};
+/// use mte_metrology::network::LengthUncertainty;
+/// let net = network_from_csv(
+///     ("s", "id,x_mm,y_mm,z_mm\nS1,0,0,0\n"),
+///     ("t", "id,x_mm,y_mm,z_mm\nP1,100,0,0\n"),
+///     ("l", "station,target,length_mm,sigma_um\nS1,P1,100.0,1.5\n"),
+///     LengthUncertainty::SEED004,
+/// )
+/// .unwrap();
+/// let (s, t, l) = network_to_csv(&net);
+/// let again = network_from_csv(("s", &s), ("t", &t), ("l", &l), LengthUncertainty::SEED004).unwrap();
+/// assert_eq!(again, net);
+/// ```
+pub fn network_to_csv(network: &Network) -> (String, String, String) {
+    use std::fmt::Write;
+    let mut s = String::from("id,x_mm,y_mm,z_mm,dead_path_mm,dead_path\n");
+    for st in &network.stations {
+        let p = st.position_mm;
+        let kind = match st.dead_path {
+            DeadPath::Free => "free",
+            DeadPath::Fixed => "fixed",
+        };
+        let _ = writeln!(
+            s,
+            "{},{},{},{},{},{kind}",
+            st.id, p.x, p.y, p.z, st.dead_path_mm
+        );
+    }
+    let mut t = String::from("id,x_mm,y_mm,z_mm\n");
+    for tg in &network.targets {
+        let p = tg.nominal_mm;
+        let _ = writeln!(t, "{},{},{},{}", tg.id, p.x, p.y, p.z);
+    }
+    let mut l = String::from("station,target,length_mm,sigma_um\n");
+    for o in &network.observations {
+        let _ = writeln!(
+            l,
+            "{},{},{:.9},{:.6}",
+            network.stations[o.station].id,
+            network.targets[o.target].id,
+            o.length_mm,
+            o.sigma_mm * 1e3
+        );
+    }
+    (s, t, l)
+}
+
 /// Build a network from three CSV texts:
 /// * stations: `id,x_mm,y_mm,z_mm[,dead_path_mm][,dead_path]` (`dead_path` = `free` | `fixed`, default `free`);
 /// * targets: `id,x_mm,y_mm,z_mm` (nominal, commanded positions);

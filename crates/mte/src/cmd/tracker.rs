@@ -334,38 +334,14 @@ pub fn run(args: &Args) -> Result<(), CliError> {
             )
             .map_err(lib)?;
             let n = &sim.network;
-            let mut s = String::from("id,x_mm,y_mm,z_mm,dead_path_mm,dead_path\n");
-            for st in &n.stations {
-                let _ = writeln!(
-                    s,
-                    "{},{},{},{},{},free",
-                    st.id, st.position_mm.x, st.position_mm.y, st.position_mm.z, st.dead_path_mm
-                );
-            }
-            dir.add("stations.csv", s);
-            let mut t = String::from("id,x_mm,y_mm,z_mm\n");
+            let (s, t, l) = mte_metrology::io::network_to_csv(n);
             let mut tr = String::from("id,x_true_mm,y_true_mm,z_true_mm\n");
             for (tg, p) in n.targets.iter().zip(&sim.true_targets) {
-                let _ = writeln!(
-                    t,
-                    "{},{},{},{}",
-                    tg.id, tg.nominal_mm.x, tg.nominal_mm.y, tg.nominal_mm.z
-                );
                 let _ = writeln!(tr, "{},{:.9},{:.9},{:.9}", tg.id, p.x, p.y, p.z);
             }
+            dir.add("stations.csv", s);
             dir.add("targets.csv", t);
             dir.add("truth.csv", tr);
-            let mut l = String::from("station,target,length_mm,sigma_um\n");
-            for o in &n.observations {
-                let _ = writeln!(
-                    l,
-                    "{},{},{:.9},{:.6}",
-                    n.stations[o.station].id,
-                    n.targets[o.target].id,
-                    o.length_mm,
-                    o.sigma_mm * 1e3
-                );
-            }
             dir.add("lengths.csv", l);
             dir.commit()?;
             println!(
