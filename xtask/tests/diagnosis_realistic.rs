@@ -85,7 +85,7 @@ fn open_world_drift_that_rises_and_falls_is_reported_unexplained() {
 /// the search finds the sawtooth's true harmonics in one dataset of three; in the others it
 /// picks aliases of the irregular target spacing, which no sentence can rescue.)
 #[test]
-fn a_sawtooth_is_reported_as_one_non_sinusoidal_periodic_error() {
+fn harmonics_found_for_a_sawtooth_are_named_one_non_sinusoidal_error() {
     use xtask::realistic::{Hidden, Spec, write_spec};
     let run = |hidden: Hidden, seed: u64| {
         let dir = std::env::temp_dir().join(format!("mte-saw-{}-{seed}", std::process::id()));

@@ -473,9 +473,10 @@ pub fn diagnose(
             obs.setup_kind, obs.setup_kind
         ));
     }
+    // (A time without spread has its own sentence above.)
     if obs
         .variable_of_kind(crate::data::VariableKind::Time)
-        .is_some()
+        .is_some_and(|t| crate::candidate::varies(&t.values))
         && obs.revisit_interval().is_none()
     {
         notes.push("no pose is measured twice: time-dependent effects (thermal drift) cannot be told from pose-dependent ones and were not tested".to_string());
@@ -1138,7 +1139,6 @@ fn f_test(rss: f64, delta_rss: f64, k: usize, dof: usize) -> f64 {
     stats::f_sf(f, k as f64, (dof - k) as f64)
 }
 
-/// The period or time constant of a term, with the quantity it is reported in.
 /// Periodic findings of one axis whose periods are the first's divided by 2, 3, …: harmonics of
 /// one periodic error that is not a sine (a sawtooth, a pitch error with a sharp profile), said
 /// in one sentence so the reader does not take them for independent causes.
@@ -1189,6 +1189,8 @@ fn harmonic_families(findings: &[Finding]) -> Vec<String> {
     notes
 }
 
+/// The period or time constant of a term, with the quantity it is reported in (a period along a
+/// rotary axis in degrees).
 fn hyper_of(family: &Family, rotary: bool) -> Option<(f64, Quantity)> {
     match family {
         Family::Periodic { period } if rotary => Some((*period, Quantity::AxisAngle)),
