@@ -284,21 +284,29 @@ pub fn dataset_from_str(
 /// # Errors
 /// [`RtestError::Io`] for unreadable files, else as [`dataset_from_str`].
 pub fn read_dataset(manifest_path: &Path, rotary: &dyn Fn(&str) -> bool) -> Result<Dataset> {
-    let read = |p: &Path| {
-        mte_linalg::text::read_text(p).map_err(|e| RtestError::Io {
-            path: p.display().to_string(),
-            message: e.to_string(),
-        })
-    };
-    let man = read(manifest_path)?;
+    let man = read_file(manifest_path)?;
+    dataset_from_manifest(
+        &manifest_path.display().to_string(),
+        &man,
+        manifest_path.parent().unwrap_or(Path::new(".")),
+        rotary,
+    )
+}
+
+/// A dataset from its manifest's text (already read, named `manifest_name` in messages) and
+/// the CSV the manifest names, relative to `dir`.
+///
+/// # Errors
+/// As [`read_dataset`].
+pub fn dataset_from_manifest(
+    manifest_name: &str,
+    manifest_text: &str,
+    dir: &Path,
+    rotary: &dyn Fn(&str) -> bool,
+) -> Result<Dataset> {
     let parsed: serde_json::Value =
-        serde_json::from_str(&man).map_err(|e| RtestError::Invalid {
-            field: format!(
-                "{} line {} column {}",
-                manifest_path.display(),
-                e.line(),
-                e.column()
-            ),
+        serde_json::from_str(manifest_text).map_err(|e| RtestError::Invalid {
+            field: format!("{manifest_name} line {} column {}", e.line(), e.column()),
             message: e.to_string(),
         })?;
     let csv_rel =
@@ -306,21 +314,26 @@ pub fn read_dataset(manifest_path: &Path, rotary: &dyn Fn(&str) -> bool) -> Resu
             .get("csv")
             .and_then(|v| v.as_str())
             .ok_or_else(|| RtestError::Invalid {
-                field: format!("{}: csv", manifest_path.display()),
+                field: format!("{manifest_name}: csv"),
                 message: "missing string field `csv`".into(),
             })?;
-    let csv_path = manifest_path
-        .parent()
-        .unwrap_or(Path::new("."))
-        .join(csv_rel);
-    let csv = read(&csv_path)?;
+    let csv_path = dir.join(csv_rel);
+    let csv = read_file(&csv_path)?;
     dataset_from_str(
-        &manifest_path.display().to_string(),
-        &man,
+        manifest_name,
+        manifest_text,
         &csv_path.display().to_string(),
         &csv,
         rotary,
     )
+}
+
+/// A user's text file ([`mte_linalg::text::read_text`]), its error naming the file.
+fn read_file(p: &Path) -> Result<String> {
+    mte_linalg::text::read_text(p).map_err(|e| RtestError::Io {
+        path: p.display().to_string(),
+        message: e.to_string(),
+    })
 }
 
 /// Manifest and CSV text of a dataset.

@@ -39,23 +39,8 @@ impl RTest {
                 .axis_index(name)
                 .is_some_and(|k| machine.axes()[k].kind == AxisKind::Rotary)
         };
-        let csv_name = file
-            .str_field("csv")
-            .ok_or_else(|| file.missing("csv", "the readings' CSV file"))?;
-        let csv_path = file.dir.join(csv_name);
-        let csv =
-            mte_linalg::text::read_text(&csv_path).map_err(|e| crate::DiagnoseError::Dataset {
-                path: csv_path.display().to_string(),
-                detail: e.to_string(),
-            })?;
-        let data = mte_rtest::io::dataset_from_str(
-            &file.path,
-            &file.text,
-            &csv_path.display().to_string(),
-            &csv,
-            &rotary,
-        )
-        .map_err(dataset_error)?;
+        let data = mte_rtest::io::dataset_from_manifest(&file.path, &file.text, &file.dir, &rotary)
+            .map_err(dataset_error)?;
         let model =
             mte_rtest::model::ObservationModel::new(&machine, &data).map_err(dataset_error)?;
         let sensitivity = model.sensitivity();
