@@ -40,7 +40,7 @@ pub(crate) fn axis_variables(machine: &Machine, values: &[Vec<f64>]) -> Vec<crat
 
 /// The machine's axis values per observation, in the machine's axis order, from the
 /// observations' variables (which [`axis_variables`] made).
-pub(crate) fn axis_values(machine: &Machine, obs: &crate::Observations) -> Vec<Vec<f64>> {
+fn axis_values(machine: &Machine, obs: &crate::Observations) -> Vec<Vec<f64>> {
     machine
         .axes()
         .iter()
@@ -155,7 +155,8 @@ fn squareness_effect(
 }
 
 /// Builds the named slot effects of a machine from the per-observation sensitivities `s`
-/// (n × n_slots), the axis values per observation, and hints on what separates them. With a
+/// (n × n_slots), the axis values of the observations' variables, and hints on what separates
+/// them. With a
 /// `reference` (sensitivities to the slots' values at each observation's reference pose, and
 /// the axis values there), an error acts at both poses.
 ///
@@ -165,10 +166,11 @@ fn squareness_effect(
 pub(crate) fn slot_effects(
     machine: &Machine,
     s: &DMat,
-    axes: &[Vec<f64>],
+    obs: &crate::Observations,
     reference: Option<(&DMat, &[Vec<f64>])>,
     hint: &dyn Fn(&SlotName) -> Option<String>,
 ) -> Vec<SlotEffect> {
+    let axes = axis_values(machine, obs);
     let reference_matrix = reference;
     let mut out = Vec::new();
     for j in 0..machine.n_slots() {

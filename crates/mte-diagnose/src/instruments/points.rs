@@ -22,7 +22,7 @@ use mte_kinematics::Machine;
 use mte_linalg::{DMat, DVec, Mat3, Vec3};
 
 use super::machine::{
-    axis_values, axis_variables, load_machine, location_names, read_axes, read_times, slot_effects,
+    axis_variables, load_machine, location_names, read_axes, read_times, slot_effects,
 };
 use crate::Result;
 use crate::candidate::{BaseModelSpec, SlotEffect, SlotRole};
@@ -397,8 +397,7 @@ impl ObservationModel for Points {
                 }
             }
         }
-        let axes_per_obs = axis_values(machine, &self.observations);
-        let mut errors = slot_effects(machine, &s, &axes_per_obs, None, &|_| None);
+        let mut errors = slot_effects(machine, &s, &self.observations, None, &|_| None);
         // The tool's and the workpiece's set-up offsets are the target's offset and the
         // instrument's pose.
         errors.retain(|e| {

@@ -7,9 +7,7 @@ use mte_kinematics::{AxisKind, Machine};
 use mte_linalg::{DMat, DVec};
 use mte_rtest::model::NuisanceKind;
 
-use super::machine::{
-    SlotName, axis_values, axis_variables, load_machine, location_names, slot_effects,
-};
+use super::machine::{SlotName, axis_variables, load_machine, location_names, slot_effects};
 use crate::Result;
 use crate::candidate::{BaseModelSpec, Candidate, SlotRole};
 use crate::data::{Observations, Variable, VariableKind};
@@ -104,7 +102,6 @@ impl ObservationModel for RTest {
             }
         }
         let per_obs = |f: &dyn Fn(usize) -> f64| -> Vec<f64> { (0..n).map(|i| f(i / 3)).collect() };
-        let axes_per_obs = axis_values(machine, &self.observations);
         let axes_at_centring: Vec<Vec<f64>> = (0..machine.axes().len())
             .map(|k| per_obs(&|r| data.setups[data.readings[r].setup].centring_q[k]))
             .collect();
@@ -119,7 +116,7 @@ impl ObservationModel for RTest {
         let errors = slot_effects(
             machine,
             &at_row,
-            &axes_per_obs,
+            &self.observations,
             Some((&at_ref, &axes_at_centring)),
             &hint,
         );

@@ -10,9 +10,7 @@ use mte_kinematics::Machine;
 use mte_linalg::{DMat, DVec, Vec3};
 use serde::Deserialize;
 
-use super::machine::{
-    axis_values, axis_variables, load_machine, read_axes, read_times, slot_effects,
-};
+use super::machine::{axis_variables, load_machine, read_axes, read_times, slot_effects};
 use crate::Result;
 use crate::candidate::{SlotEffect, SlotRole};
 use crate::data::{Observations, Variable, VariableKind};
@@ -272,8 +270,7 @@ impl ObservationModel for Tracker {
             s.row_mut(k)
                 .copy_from(&(u[k].transpose() * &tip[self.target_of[k]]));
         }
-        let axes_per_obs = axis_values(machine, &self.observations);
-        let mut errors = slot_effects(machine, &s, &axes_per_obs, None, &|_| None);
+        let mut errors = slot_effects(machine, &s, &self.observations, None, &|_| None);
         errors.retain(|e| {
             !matches!(
                 e.role,
