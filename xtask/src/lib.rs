@@ -4,4 +4,5 @@
 
 pub mod realistic;
 pub mod reproduce;
+pub mod scale;
 pub mod studies;

@@ -9,7 +9,7 @@
 use std::process::{Command, ExitCode};
 use xtask::reproduce::{self, Freshness, PAPERS};
 
-const USAGE: &str = "usage: cargo xtask <reproduce [seed000|seed002|seed003|seed004|all] [--check] | reproduce seed003 --timing | bench [-- criterion args] | study [fdr|power|coverage|openworld|all] [--n N] [--n-power M] [--seed S] [--kind axis|tracker|rtest] [--base-model omit] [--out FILE]>";
+const USAGE: &str = "usage: cargo xtask <reproduce [seed000|seed002|seed003|seed004|all] [--check] | reproduce seed003 --timing | bench [-- criterion args] | bench-diagnose [--rows N] [--seed S] | study [fdr|power|coverage|openworld|all] [--n N] [--n-power M] [--seed S] [--kind axis|tracker|rtest] [--base-model omit] [--out FILE]>";
 
 /// `cargo xtask realistic <axis|tracker|rtest|points> <seed> <dir>`: writes one clean realistic
 /// dataset (every ordinary error, no hidden effect) for trying `mte diagnose` or timing it;
@@ -60,6 +60,7 @@ fn main() -> ExitCode {
     let result = match args.first().map(String::as_str) {
         Some("reproduce") => run_reproduce(&args[1..]),
         Some("bench") => run_bench(&args[1..]),
+        Some("bench-diagnose") => run_bench_diagnose(&args[1..]),
         Some("study") => run_study(&args[1..]),
         Some("realistic") => run_realistic(&args[1..]),
         _ => Err(USAGE.to_string()),
@@ -262,6 +263,50 @@ fn run_study(args: &[String]) -> Result<(), String> {
 
 /// Runs every criterion bench of the workspace with short warm-up and measurement times and
 /// prints a Markdown summary (bench name, median time). Extra arguments go to criterion.
+/// `cargo xtask bench-diagnose [--rows N] [--seed S]`: the diagnosis of an N-row axis log
+/// (default 1 000 000), its time as a ratio to reading the same data in the same run, and the
+/// peak memory.
+fn run_bench_diagnose(args: &[String]) -> Result<(), String> {
+    let mut rows = 1_000_000usize;
+    let mut seed = 1u64;
+    let mut it = args.iter();
+    while let Some(a) = it.next() {
+        let value = it.next().ok_or_else(|| format!("{a}: expected a value"))?;
+        match a.as_str() {
+            "--rows" => {
+                rows = value
+                    .parse()
+                    .map_err(|e| format!("--rows `{value}`: {e}"))?
+            }
+            "--seed" => {
+                seed = value
+                    .parse()
+                    .map_err(|e| format!("--seed `{value}`: {e}"))?
+            }
+            _ => return Err(format!("unknown option `{a}`; {USAGE}")),
+        }
+    }
+    let dir = reproduce::workspace_root().join("target/bench-diagnose");
+    let _ = std::fs::remove_dir_all(&dir);
+    let r = xtask::scale::run(rows, seed, &dir, 64.0)?;
+    let gb = |g: Option<f64>| g.map_or("n/a".into(), |g| format!("{g:.2} GB"));
+    println!(
+        "| rows | read + prepare | diagnosis | ratio | peak memory after reading | peak memory | causes |"
+    );
+    println!("|---:|---:|---:|---:|---:|---:|---|");
+    println!(
+        "| {} | {:.2} s | {:.2} s | {:.1}× | {} | {} | {} |",
+        r.rows,
+        r.load_s,
+        r.diagnose_s,
+        r.diagnose_s / r.load_s,
+        gb(r.load_peak_gb),
+        gb(r.peak_gb),
+        r.findings.join(", ")
+    );
+    Ok(())
+}
+
 fn run_bench(args: &[String]) -> Result<(), String> {
     let extra: Vec<&str> = args
         .iter()

@@ -63,9 +63,21 @@ pub(crate) fn sin_cos_columns(values: &[f64], period: f64) -> DMat {
 /// spacing precisely so that a ball-screw pitch shorter than the mean step is still seen; on a
 /// regular grid of step d the alias period is d and the scan stops at 2.5 d, as Nyquist demands.
 pub(crate) fn periods_to_scan(values: &[f64], rotary: bool) -> Vec<f64> {
-    let positions = distinct_sorted(values);
+    let mut positions = distinct_sorted(values);
     if positions.len() < 6 {
         return Vec::new();
+    }
+    // A dense record (a continuous log) is judged by at most 20 000 of its positions, evenly by
+    // rank, ends kept: their spacing is still far below the shortest period scanned, and the
+    // alias search stays cheap.
+    const MOST_POSITIONS: usize = 20_000;
+    if positions.len() > MOST_POSITIONS {
+        let last = positions[positions.len() - 1];
+        let step = positions.len().div_ceil(MOST_POSITIONS);
+        positions = positions.into_iter().step_by(step).collect();
+        if positions.last() != Some(&last) {
+            positions.push(last);
+        }
     }
     if rotary {
         const TURN: f64 = std::f64::consts::TAU;

@@ -62,6 +62,44 @@ pub trait Candidate: Send + Sync {
     fn completes_base(&self) -> bool {
         false
     }
+
+    /// The candidate on the observations `rows` of `obs` only: a long record is searched on an
+    /// evenly thinned copy, and the variant chosen there is evaluated again on all observations
+    /// ([`Candidate::at`], or [`Candidate::variants`] for a cause without a hyper-parameter).
+    /// The variants keep their order. The default evaluates every variant on all observations
+    /// and keeps the rows (no refinement on the thinned copy); override it where that is costly.
+    fn on_rows(&self, obs: &Observations, rows: &[usize]) -> Box<dyn Candidate> {
+        Box::new(Restricted {
+            variants: self
+                .variants(obs)
+                .iter()
+                .map(|t| t.select_rows(rows))
+                .collect(),
+            requires: self.requires().map(str::to_string),
+            completes_base: self.completes_base(),
+        })
+    }
+}
+
+/// A candidate's variants on a subset of the observations ([`Candidate::on_rows`]).
+struct Restricted {
+    variants: Vec<Term>,
+    requires: Option<String>,
+    completes_base: bool,
+}
+
+impl Candidate for Restricted {
+    fn variants(&self, _obs: &Observations) -> Vec<Term> {
+        self.variants.clone()
+    }
+
+    fn requires(&self) -> Option<&str> {
+        self.requires.as_deref()
+    }
+
+    fn completes_base(&self) -> bool {
+        self.completes_base
+    }
 }
 
 /// A cause that is a candidate only once the term it builds on is in the model.
@@ -92,11 +130,22 @@ impl Candidate for Requires {
     fn columns(&self, obs: &Observations) -> usize {
         self.inner.columns(obs)
     }
+
+    fn on_rows(&self, obs: &Observations, rows: &[usize]) -> Box<dyn Candidate> {
+        Box::new(Requires {
+            term: self.term.clone(),
+            inner: self.inner.on_rows(obs, rows),
+        })
+    }
 }
 
 impl Candidate for Term {
     fn variants(&self, _obs: &Observations) -> Vec<Term> {
         vec![self.clone()]
+    }
+
+    fn on_rows(&self, _obs: &Observations, rows: &[usize]) -> Box<dyn Candidate> {
+        Box::new(self.select_rows(rows))
     }
 }
 
@@ -145,6 +194,25 @@ pub struct SlotEffect {
 }
 
 impl SlotEffect {
+    /// The slot on the observations `rows` only.
+    fn select_rows(&self, rows: &[usize]) -> SlotEffect {
+        SlotEffect {
+            column: DVec::from_iterator(rows.len(), rows.iter().map(|&i| self.column[i])),
+            reference: self.reference.as_ref().map(|(r, s)| {
+                (
+                    DVec::from_iterator(rows.len(), rows.iter().map(|&i| r[i])),
+                    pick(s, rows),
+                )
+            }),
+            name: self.name.clone(),
+            label: self.label.clone(),
+            meaning: self.meaning.clone(),
+            quantity: self.quantity,
+            role: self.role.clone(),
+            separated_by: self.separated_by.clone(),
+        }
+    }
+
     /// The effect of a constant error.
     fn constant_column(&self) -> DVec {
         match &self.reference {
@@ -299,8 +367,14 @@ pub fn physical_effects(
                         slot.quantity,
                     );
                     let separated_by = slot.separated_by.clone();
-                    let make = move |p: f64| {
-                        let cols = effect.modulated(&values, &|s| sin_cos_columns(s, p));
+                    let make = move |p: f64, rows: Option<&[usize]>| {
+                        let basis = |s: &[f64]| sin_cos_columns(s, p);
+                        let cols = match rows {
+                            None => effect.modulated(&values, &basis),
+                            Some(rows) => effect
+                                .select_rows(rows)
+                                .modulated(&pick(&values, rows), &basis),
+                        };
                         Term {
                             name: format!("{name} periodic"),
                             label: format!(
@@ -328,11 +402,7 @@ pub fn physical_effects(
                     };
                     let grid = periods_to_scan(&v.values, rotary);
                     if !grid.is_empty() {
-                        out.push(Box::new(Scan {
-                            grid,
-                            refine_grid: !rotary,
-                            make: Box::new(make),
-                        }));
+                        out.push(Box::new(Scan::new(grid, !rotary, make)));
                     }
                     if let Some(d) = &direction {
                         let cols = DMat::from_fn(n, 1, |i, _| slot.column[i] * 0.5 * d[i]);
@@ -675,7 +745,18 @@ impl Candidate for Completion {
     fn completes_base(&self) -> bool {
         true
     }
+
+    fn on_rows(&self, _obs: &Observations, rows: &[usize]) -> Box<dyn Candidate> {
+        Box::new(Completion {
+            term: self.term.select_rows(rows),
+            after: self.after.clone(),
+        })
+    }
 }
+
+/// The term of a [`Scan`] for one value of its hyper-parameter, on all observations (`None`) or
+/// on the given rows only.
+pub type ScanTerm = dyn Fn(f64, Option<&[usize]>) -> Term + Send + Sync;
 
 /// One cause with a hyper-parameter scanned over a grid (a period, a time constant); the best
 /// grid value is refined by golden-section search between its neighbours.
@@ -685,13 +766,34 @@ pub struct Scan {
     /// Refine the best grid value (off for values that must stay on the grid, e.g. harmonics).
     pub refine_grid: bool,
     /// The term for one value.
-    #[allow(clippy::type_complexity)]
-    pub make: Box<dyn Fn(f64) -> Term + Send + Sync>,
+    pub make: std::sync::Arc<ScanTerm>,
+    /// The observations the terms are made on (`None`: all).
+    pub rows: Option<std::sync::Arc<[usize]>>,
+}
+
+impl Scan {
+    /// A scan over `grid` of the terms `make` gives, on all observations.
+    pub fn new(
+        grid: Vec<f64>,
+        refine_grid: bool,
+        make: impl Fn(f64, Option<&[usize]>) -> Term + Send + Sync + 'static,
+    ) -> Scan {
+        Scan {
+            grid,
+            refine_grid,
+            make: std::sync::Arc::new(make),
+            rows: None,
+        }
+    }
+
+    fn term(&self, value: f64) -> Term {
+        (self.make)(value, self.rows.as_deref())
+    }
 }
 
 impl Candidate for Scan {
     fn variants(&self, _obs: &Observations) -> Vec<Term> {
-        self.grid.iter().map(|&p| (self.make)(p)).collect()
+        self.grid.iter().map(|&p| self.term(p)).collect()
     }
 
     fn refine(&self, best: usize, score: &dyn Fn(&Term) -> f64) -> Option<Term> {
@@ -700,7 +802,7 @@ impl Candidate for Scan {
         }
         let lo = self.grid[best.saturating_sub(1)];
         let hi = self.grid[(best + 1).min(self.grid.len() - 1)];
-        let f = |p: f64| score(&(self.make)(p));
+        let f = |p: f64| score(&self.term(p));
         let golden = 0.5 * (5f64.sqrt() - 1.0);
         let (mut a, mut b) = (lo, hi);
         let mut c = b - golden * (b - a);
@@ -722,17 +824,30 @@ impl Candidate for Scan {
             }
         }
         let p = 0.5 * (a + b);
-        (f(p) < f(self.grid[best])).then(|| (self.make)(p))
+        (f(p) < f(self.grid[best])).then(|| self.term(p))
     }
 
     fn at(&self, _variant: usize, value: f64) -> Option<Term> {
-        Some((self.make)(value))
+        Some(self.term(value))
     }
 
     fn columns(&self, _obs: &Observations) -> usize {
         self.grid
             .first()
-            .map_or(0, |&p| self.grid.len() * (self.make)(p).columns.ncols())
+            .map_or(0, |&p| self.grid.len() * self.term(p).columns.ncols())
+    }
+
+    fn on_rows(&self, _obs: &Observations, rows: &[usize]) -> Box<dyn Candidate> {
+        let rows: Vec<usize> = match &self.rows {
+            Some(mine) => rows.iter().map(|&i| mine[i]).collect(),
+            None => rows.to_vec(),
+        };
+        Box::new(Scan {
+            grid: self.grid.clone(),
+            refine_grid: self.refine_grid,
+            make: self.make.clone(),
+            rows: Some(rows.into()),
+        })
     }
 }
 
@@ -742,6 +857,12 @@ pub struct Alternatives(pub Vec<Term>);
 impl Candidate for Alternatives {
     fn variants(&self, _obs: &Observations) -> Vec<Term> {
         self.0.clone()
+    }
+
+    fn on_rows(&self, _obs: &Observations, rows: &[usize]) -> Box<dyn Candidate> {
+        Box::new(Alternatives(
+            self.0.iter().map(|t| t.select_rows(rows)).collect(),
+        ))
     }
 }
 
@@ -774,26 +895,26 @@ fn drift_candidates(constant: &Term, t: &[f64], floor: f64) -> Vec<Box<dyn Candi
     let (name, label) = (constant.name.clone(), constant.label.clone());
     let column: Vec<f64> = col.iter().copied().collect();
     let times = t.to_vec();
-    let make = move |tau: f64| Term {
+    let make = move |tau: f64, rows: Option<&[usize]>| Term {
         name: format!("{name} drift exp"),
         label: format!("thermal drift of {name} (first-order, τ = {tau:.0} s)"),
         meaning: format!("{label} settles towards a new value with a thermal time constant"),
         family: Family::Drift {
             time_constant_s: Some(tau),
         },
-        columns: DMat::from_fn(times.len(), 1, |i, _| {
-            column[i] * (1.0 - (-(times[i] - t0) / tau).exp())
-        }),
+        columns: {
+            let at = |i: usize| column[i] * (1.0 - (-(times[i] - t0) / tau).exp());
+            match rows {
+                None => DMat::from_fn(times.len(), 1, |i, _| at(i)),
+                Some(rows) => DMat::from_fn(rows.len(), 1, |k, _| at(rows[k])),
+            }
+        },
         coefficients: vec![(format!("{name} change"), q)],
         summary: Summary::EachCoefficient,
         exposed_by: Some("t".into()),
         separated_by: None,
     };
-    let exponential = Scan {
-        grid: time_constants_to_scan(t, floor),
-        refine_grid: true,
-        make: Box::new(make),
-    };
+    let exponential = Scan::new(time_constants_to_scan(t, floor), true, make);
     vec![Box::new(linear), Box::new(exponential)]
 }
 
@@ -803,6 +924,10 @@ fn coefficient_name(name: &str, suffix: &str, k: usize, width: usize) -> String 
     } else {
         format!("{name}{suffix}[{k}]")
     }
+}
+
+fn pick(values: &[f64], rows: &[usize]) -> Vec<f64> {
+    rows.iter().map(|&i| values[i]).collect()
 }
 
 fn column_matrix(c: &DVec) -> DMat {

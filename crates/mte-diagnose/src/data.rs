@@ -69,6 +69,41 @@ impl Observations {
         self.values.is_empty()
     }
 
+    /// The observations `rows` only, in that order (setups and channels keep their names).
+    pub fn select(&self, rows: &[usize]) -> Observations {
+        let pick = |v: &DVec| DVec::from_iterator(rows.len(), rows.iter().map(|&i| v[i]));
+        Observations {
+            values: pick(&self.values),
+            sigma: self.sigma.as_ref().map(pick),
+            variables: self
+                .variables
+                .iter()
+                .map(|v| Variable {
+                    name: v.name.clone(),
+                    kind: v.kind,
+                    values: rows.iter().map(|&i| v.values[i]).collect(),
+                })
+                .collect(),
+            setup: rows.iter().map(|&i| self.setup[i]).collect(),
+            channel: rows.iter().map(|&i| self.channel[i]).collect(),
+            ..self.clone_labels()
+        }
+    }
+
+    fn clone_labels(&self) -> Observations {
+        Observations {
+            values: DVec::zeros(0),
+            sigma: None,
+            variables: Vec::new(),
+            setup: Vec::new(),
+            setup_names: self.setup_names.clone(),
+            channel: Vec::new(),
+            channel_names: self.channel_names.clone(),
+            setup_kind: self.setup_kind.clone(),
+            quantity: self.quantity,
+        }
+    }
+
     /// The covariate called `name`.
     pub fn variable(&self, name: &str) -> Option<&Variable> {
         self.variables.iter().find(|v| v.name == name)

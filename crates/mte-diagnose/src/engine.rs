@@ -43,6 +43,11 @@ pub struct DiagnoseParams {
     /// Memory the candidates' designs may take, GB; a larger problem is refused before anything
     /// is allocated ([`DiagnoseError::TooLarge`]). Default 4.
     pub max_memory_gb: f64,
+    /// Most observations the search for causes runs on. A longer record (a continuous log) is
+    /// searched on every k-th observation in acquisition order; the completed base and the
+    /// causes found are then fitted to all observations, and the sizes, uncertainties, structure
+    /// tests and verdict come from all of them (the report says so). Default 20 000.
+    pub search_rows: usize,
 }
 
 impl Default for DiagnoseParams {
@@ -56,6 +61,7 @@ impl Default for DiagnoseParams {
             shortlist: 8,
             outer_folds: 5,
             max_memory_gb: 4.0,
+            search_rows: 10_000,
         }
     }
 }
@@ -187,7 +193,7 @@ pub struct Step {
 
 /// The evidence of one finding (or of unexplained structure) for a plot: the residuals of the
 /// final model without the finding against the covariate that exposes it, and the finding's
-/// fitted effect.
+/// fitted effect. At most 20 000 points: a longer record is shown by every k-th observation.
 #[derive(Debug, Clone, Serialize)]
 pub struct ResidualSeries {
     /// Covariate name.
@@ -316,9 +322,14 @@ pub fn diagnose(
             needed,
         });
     }
-    // Every variant's design is kept: refuse before allocating what the machine cannot hold.
+    // A long record is searched on an evenly thinned copy; what it finds is fitted to all.
+    let thinned =
+        (n > params.search_rows).then(|| thin_rows(&obs.acquisition_order(), params.search_rows));
+    let n_search = thinned.as_ref().map_or(n, Vec::len);
+    // Every variant's design is kept for the search: refuse before allocating what the machine
+    // cannot hold.
     let columns: usize = candidates.iter().map(|c| c.columns(obs)).sum();
-    let needed_gb = (n as f64) * (columns + 4 * base_width) as f64 * 8.0 / 1e9;
+    let needed_gb = ((n_search * columns) as f64 + (n * 4 * base_width) as f64) * 8.0 / 1e9;
     if needed_gb > params.max_memory_gb {
         return Err(DiagnoseError::TooLarge {
             observations: n,
@@ -327,18 +338,64 @@ pub fn diagnose(
             limit_gb: params.max_memory_gb,
         });
     }
-    let pool = Pool::new(obs, candidates, &base);
+    let thin = thinned.as_ref().map(|rows| {
+        (
+            obs.select(rows),
+            base.iter().map(|t| t.select_rows(rows)).collect::<Vec<_>>(),
+            candidates
+                .iter()
+                .map(|c| c.on_rows(obs, rows))
+                .collect::<Vec<_>>(),
+        )
+    });
+    let (obs_s, base_s, candidates_s) = match &thin {
+        Some((o, b, c)) => (o, &b[..], &c[..]),
+        None => (obs, &base[..], candidates),
+    };
+    let w_s = whitening(obs_s);
+    let pool = Pool::new(obs_s, candidates_s, base_s);
+    let searcher = Searcher {
+        obs: obs_s,
+        base: base_s,
+        pool: &pool,
+        candidates: candidates_s,
+        params,
+    };
+    let folds_s = Folds::blocked(
+        obs_s,
+        &vec![true; n_search],
+        params.folds,
+        params.blocks_per_fold,
+    );
+    // The search on all data and the outer folds' searches are independent: run them together.
+    let (mut search, held_out) = rayon::join(
+        || searcher.search(&w_s, &folds_s),
+        || searcher.held_out(&w_s),
+    );
+    drop(pool);
+    drop(thin);
+    if thinned.is_some() {
+        // The terms found, on all observations (the thinned candidates are the full ones'
+        // restrictions, in the same order).
+        search.completed = search
+            .completed
+            .iter()
+            .filter_map(|t| full_completion(candidates, obs, &t.name))
+            .collect();
+        for c in &mut search.chosen {
+            c.term = full_variant(candidates[c.candidate].as_ref(), obs, c);
+        }
+    }
+    let everything = vec![true; n];
+    let folds = Folds::blocked(obs, &everything, params.folds, params.blocks_per_fold);
+    let no_pool = Pool::default();
     let searcher = Searcher {
         obs,
         base: &base,
-        pool: &pool,
+        pool: &no_pool,
         candidates,
         params,
     };
-    let everything = vec![true; n];
-    let folds = Folds::blocked(obs, &everything, params.folds, params.blocks_per_fold);
-    // The search on all data and the outer folds' searches are independent: run them together.
-    let (search, held_out) = rayon::join(|| searcher.search(&w, &folds), || searcher.held_out(&w));
 
     // The base as completed by the search's data.
     let base_completed: Vec<String> = search.completed.iter().map(|t| t.name.clone()).collect();
@@ -363,12 +420,17 @@ pub fn diagnose(
         &w,
         base_sol.rss_w,
         base_sol.dof(),
+        thinned.as_deref(),
     );
 
     // The final model. A cause whose size the data do not determine once the uncertainty of its
     // period or time constant is counted (every estimate within 2 u of zero) is not earned: it
     // leaves, the least determined first, with what builds on it.
     let mut chosen = search.chosen;
+    if thinned.is_some() {
+        // Periods and time constants found on the thinned copy, refined on all observations.
+        gauss_newton_hyper(&searcher, &mut chosen, &w);
+    }
     let mut pruned = search.pruned;
     let (terms, x, sol, extended, scale, hyper_u, extended_parameters) = loop {
         let mut terms: Vec<Term> = base.clone();
@@ -437,11 +499,18 @@ pub fn diagnose(
             exposed_by: c.term.exposed_by.clone(),
         })
         .collect();
-    let remaining_structure: Vec<StructureTest> =
-        structure_tests(obs, &x, &sol.residuals, &w, sol.rss_w, sol.dof())
-            .into_iter()
-            .filter(|t| t.is_significant(params.alpha))
-            .collect();
+    let remaining_structure: Vec<StructureTest> = structure_tests(
+        obs,
+        &x,
+        &sol.residuals,
+        &w,
+        sol.rss_w,
+        sol.dof(),
+        thinned.as_deref(),
+    )
+    .into_iter()
+    .filter(|t| t.is_significant(params.alpha))
+    .collect();
     let consistent_with_noise = extended.chi2_p_value.is_none_or(|p| p >= params.alpha)
         || extended.sigma0 <= STATED_NOISE_TOLERANCE;
     let verdict = if !remaining_structure.is_empty() || !consistent_with_noise {
@@ -480,6 +549,12 @@ pub fn diagnose(
         && obs.revisit_interval().is_none()
     {
         notes.push("no pose is measured twice: time-dependent effects (thermal drift) cannot be told from pose-dependent ones and were not tested".to_string());
+    }
+    if let Some(rows) = &thinned {
+        notes.push(format!(
+            "a long record: the search for causes (and its held-out figures) ran on {} of the {n} observations, evenly spread in acquisition order (DiagnoseParams::search_rows); the completed base and the causes found were then fitted to all {n}, which give the sizes, uncertainties, structure tests and verdict",
+            rows.len()
+        ));
     }
     notes.extend(harmonic_families(&findings));
     let residual_series = residual_series(
@@ -520,6 +595,29 @@ pub fn diagnose(
     })
 }
 
+/// About `most` of the observations in acquisition order `order`, evenly spread and irregular:
+/// one at a pseudo-random place (a hash of the block's index: deterministic) in each block of
+/// consecutive ones. A regular stride would sample a continuous log at nearly regular positions,
+/// which aliases periodic errors; the irregular choice does not. Sorted by row.
+fn thin_rows(order: &[usize], most: usize) -> Vec<usize> {
+    let step = order.len().div_ceil(most.max(1));
+    let mut rows: Vec<usize> = order
+        .chunks(step)
+        .enumerate()
+        .map(|(b, block)| {
+            let mut z = (b as u64)
+                .wrapping_add(1)
+                .wrapping_mul(0x9E37_79B9_7F4A_7C15);
+            z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+            z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+            z ^= z >> 31;
+            block[(z % block.len() as u64) as usize]
+        })
+        .collect();
+    rows.sort_unstable();
+    rows
+}
+
 fn check_params(p: &DiagnoseParams) -> Result<()> {
     let bad = |field: &str, detail: String| {
         Err(DiagnoseError::InvalidData {
@@ -556,6 +654,7 @@ fn check_params(p: &DiagnoseParams) -> Result<()> {
 
 /// The candidates' variants on these observations, with the candidate each came from.
 /// Candidates named like a base term are the base's own: they are not searched.
+#[derive(Default)]
 struct Pool {
     variants: Vec<Vec<Term>>,
     source: Vec<usize>,
@@ -597,8 +696,8 @@ impl Pool {
 #[derive(Clone)]
 struct Chosen {
     term: Term,
-    /// Pool entry and variant.
-    entry: usize,
+    /// The candidate it came from, and the variant.
+    candidate: usize,
     variant: usize,
     /// Which component of a recurring cause (0 = first).
     component: usize,
@@ -638,6 +737,11 @@ impl Searcher<'_> {
         self.candidates[self.pool.source[entry]].as_ref()
     }
 
+    /// The candidate a chosen term came from.
+    fn chosen_candidate(&self, c: &Chosen) -> &dyn Candidate {
+        self.candidates[c.candidate].as_ref()
+    }
+
     /// Completes the base, then searches for causes on top of it. Observations of weight zero
     /// take no part.
     fn search(&self, w: &DVec, folds: &Folds) -> SearchResult {
@@ -666,7 +770,7 @@ impl Searcher<'_> {
             let terms: Vec<&Term> = self.base.iter().chain(&done).collect();
             let x = design(&terms, n);
             let sol = solve(&x, &self.obs.values, w);
-            let projector = Projector::new(&x, w);
+            let projector = Projector::new(&x, w, &sol.residuals);
             let eligible: Vec<usize> = entries
                 .iter()
                 .copied()
@@ -683,7 +787,7 @@ impl Searcher<'_> {
                 let t = &self.pool.variants[ci][0];
                 // A block of orders may hold some the model already has (confounded components
                 // of a point measurement): it is tested on the new directions it brings.
-                let inc = projector.increment(&t.columns, &sol.residuals);
+                let inc = projector.increment(&t.columns);
                 if inc.new_rank == 0 {
                     used[ci] = true;
                     continue;
@@ -742,7 +846,7 @@ impl Searcher<'_> {
         let mut cv_rms = folds.rms(&folds.residuals(&x, y, w));
 
         loop {
-            let projector = Projector::new(&x, w);
+            let projector = Projector::new(&x, w, &sol.residuals);
             let dof = sol.dof();
             // A cause that builds on a term needs the term in the model: by name, or as a
             // combination of model terms (an absolute location error when the relative ones
@@ -751,7 +855,7 @@ impl Searcher<'_> {
                 terms.iter().any(|t| t.name == name)
                     || self.pool.by_name.get(name).is_some_and(|&k| {
                         let c = &self.pool.variants[k][0].columns;
-                        projector.increment(c, &sol.residuals).separability < SEPARABILITY_TOLERANCE
+                        projector.increment(c).separability < SEPARABILITY_TOLERANCE
                     })
             };
             let eligible: Vec<usize> = (0..entries)
@@ -772,7 +876,7 @@ impl Searcher<'_> {
                     let t = overrides
                         .get(&(ci, vi))
                         .unwrap_or(&self.pool.variants[ci][vi]);
-                    let inc = projector.increment(&t.columns, &sol.residuals);
+                    let inc = projector.increment(&t.columns);
                     if inc.separability < SEPARABILITY_TOLERANCE || inc.new_rank < t.width() {
                         continue;
                     }
@@ -803,14 +907,12 @@ impl Searcher<'_> {
                 // only where the grid's best comes near significance.
                 let p_grid = f_test(sol.rss_w, inc.delta_rss, k, dof) * variants_tested as f64;
                 let near = p_grid < REFINE_LEVEL * params.alpha;
-                let score = |t: &Term| {
-                    sol.rss_w - projector.increment(&t.columns, &sol.residuals).delta_rss
-                };
+                let score = |t: &Term| sol.rss_w - projector.increment(&t.columns).delta_rss;
                 if let Some(refined) = near
                     .then(|| self.candidate(ci).refine(vi, &score))
                     .flatten()
                 {
-                    inc = projector.increment(&refined.columns, &sol.residuals);
+                    inc = projector.increment(&refined.columns);
                     overrides.insert((ci, vi), nth_component(refined, times_chosen[ci]));
                 }
                 let p = f_test(sol.rss_w, inc.delta_rss, k, dof) * variants_tested as f64;
@@ -919,7 +1021,7 @@ impl Searcher<'_> {
             }
             chosen.push(Chosen {
                 term,
-                entry: ci,
+                candidate: self.pool.source[ci],
                 variant: vi,
                 component: times_chosen[ci] - 1,
                 p_value,
@@ -964,7 +1066,7 @@ impl Searcher<'_> {
                 solve(&design(&terms, n), &self.obs.values, w).rss_w
             };
             let Some(refined) = self
-                .candidate(chosen[j].entry)
+                .chosen_candidate(&chosen[j])
                 .refine(chosen[j].variant, &rss_with)
             else {
                 continue;
@@ -1008,7 +1110,7 @@ impl Searcher<'_> {
         let name = chosen.remove(j).term.name;
         let mut removed = vec![name];
         chosen.retain(|c| {
-            let dependent = self.candidate(c.entry).requires() == Some(removed[0].as_str());
+            let dependent = self.chosen_candidate(c).requires() == Some(removed[0].as_str());
             if dependent {
                 removed.push(c.term.name.clone());
             }
@@ -1036,7 +1138,7 @@ impl Searcher<'_> {
         let mut t = self.base.to_vec();
         for (k, c) in chosen.iter().enumerate() {
             if Some(k) == skip
-                || (skipped.is_some() && self.candidate(c.entry).requires() == skipped)
+                || (skipped.is_some() && self.chosen_candidate(c).requires() == skipped)
             {
                 continue;
             }
@@ -1202,6 +1304,63 @@ fn hyper_of(family: &Family, rotary: bool) -> Option<(f64, Quantity)> {
     }
 }
 
+/// Refines the periods and time constants of the chosen terms by Gauss–Newton steps on the
+/// searcher's observations (each step regresses the residuals on the model and on every
+/// hyper-parameter's derivative column); a step is kept while it lowers the weighted RSS.
+fn gauss_newton_hyper(searcher: &Searcher<'_>, chosen: &mut [Chosen], w: &DVec) {
+    let n = searcher.obs.len();
+    for _ in 0..3 {
+        let terms = searcher.with(chosen, None);
+        let x = design(&terms.iter().collect::<Vec<_>>(), n);
+        let sol = solve(&x, &searcher.obs.values, w);
+        let mut col = x.ncols() - chosen.iter().map(|c| c.term.width()).sum::<usize>();
+        let mut extra: Vec<(usize, f64, DVec)> = Vec::new(); // (chosen, value, derivative)
+        for (k, c) in chosen.iter().enumerate() {
+            let width = c.term.width();
+            if let Some((h, _)) = hyper_of(&c.term.family, false) {
+                let step = 1e-4 * h.abs().max(1e-12);
+                let cand = searcher.chosen_candidate(c);
+                if let (Some(plus), Some(minus)) =
+                    (cand.at(c.variant, h + step), cand.at(c.variant, h - step))
+                {
+                    let coef = sol.coef.rows(col, width);
+                    extra.push((k, h, (plus.columns - minus.columns) * coef / (2.0 * step)));
+                }
+            }
+            col += width;
+        }
+        if extra.is_empty() {
+            return;
+        }
+        let mut aug = DMat::zeros(n, x.ncols() + extra.len());
+        aug.columns_mut(0, x.ncols()).copy_from(&x);
+        for (e, (_, _, d)) in extra.iter().enumerate() {
+            aug.column_mut(x.ncols() + e).copy_from(d);
+        }
+        let steps = solve(&aug, &sol.residuals, w).coef;
+        drop(aug);
+        let mut moved = chosen.to_vec();
+        for (e, (k, h, _)) in extra.iter().enumerate() {
+            let delta = steps[x.ncols() + e];
+            let c = &mut moved[*k];
+            if let Some(t) = searcher.chosen_candidate(c).at(c.variant, h + delta) {
+                c.term = nth_component(t, c.component);
+            }
+        }
+        let terms = searcher.with(&moved, None);
+        let rss = solve(
+            &design(&terms.iter().collect::<Vec<_>>(), n),
+            &searcher.obs.values,
+            w,
+        )
+        .rss_w;
+        if rss.is_nan() || rss >= sol.rss_w {
+            return;
+        }
+        chosen.clone_from_slice(&moved);
+    }
+}
+
 /// Cofactor of the coefficients of the final model, widened by the uncertainty of the chosen
 /// terms' periods and time constants: the design is augmented by each hyper-parameter's
 /// derivative column (Gauss–Newton at the optimum), whose block of the inverse normal matrix
@@ -1223,7 +1382,7 @@ fn covariance_with_hyper(
         let width = c.term.width();
         if let Some((h, _)) = hyper_of(&c.term.family, false) {
             let step = 1e-4 * h.abs().max(1e-12);
-            let cand = searcher.candidate(c.entry);
+            let cand = searcher.chosen_candidate(c);
             if let (Some(plus), Some(minus)) =
                 (cand.at(c.variant, h + step), cand.at(c.variant, h - step))
             {
@@ -1251,6 +1410,29 @@ fn covariance_with_hyper(
         }
     }
     (aug_sol.cofactor.view((0, 0), (p, p)).into_owned(), hyper)
+}
+
+/// The base completion called `name` on all observations.
+fn full_completion(
+    candidates: &[Box<dyn Candidate>],
+    obs: &Observations,
+    name: &str,
+) -> Option<Term> {
+    candidates
+        .iter()
+        .filter(|c| c.completes_base())
+        .flat_map(|c| c.variants(obs))
+        .find(|t| t.name == name)
+}
+
+/// A chosen term (found on a thinned copy) on all observations: the candidate's variant at the
+/// period or time constant the search found, as the same component of a recurring cause.
+fn full_variant(candidate: &dyn Candidate, obs: &Observations, c: &Chosen) -> Term {
+    let term = hyper_of(&c.term.family, false)
+        .and_then(|(h, _)| candidate.at(c.variant, h))
+        .or_else(|| candidate.variants(obs).into_iter().nth(c.variant))
+        .expect("a chosen variant exists on all observations");
+    nth_component(term, c.component)
 }
 
 /// Level (Bonferroni over the eligible ones) at which a higher order of a base component error
@@ -1566,5 +1748,27 @@ fn residual_series(
             });
         }
     }
+    for series in &mut out {
+        series.thin(SERIES_POINTS);
+    }
     out
+}
+
+/// Most points of a residual series (a longer record is shown by every k-th observation).
+const SERIES_POINTS: usize = 20_000;
+
+impl ResidualSeries {
+    /// Keeps every k-th point so that at most `max` remain.
+    fn thin(&mut self, max: usize) {
+        let n = self.x.len();
+        if n <= max {
+            return;
+        }
+        let step = n.div_ceil(max);
+        let keep = |v: &mut Vec<f64>| *v = v.iter().copied().step_by(step).collect();
+        keep(&mut self.x);
+        keep(&mut self.residual);
+        keep(&mut self.effect);
+        self.channel = self.channel.iter().copied().step_by(step).collect();
+    }
 }

@@ -1,6 +1,7 @@
 //! Weighted least squares over blocks of terms, blocked cross-validation, and the projection
 //! that scores a candidate against the current model.
 
+use mte_linalg::bridge::{as_faer, faer_to_dmat};
 use mte_linalg::{DMat, DVec};
 
 use crate::data::Observations;
@@ -73,29 +74,10 @@ pub(crate) fn solve(x: &DMat, y: &DVec, w: &DVec) -> Solution {
             observations,
         };
     }
-    let mut xw = x.clone();
-    for (i, wi) in w.iter().enumerate() {
-        xw.row_mut(i).scale_mut(*wi);
-    }
-    let scale: DVec = DVec::from_iterator(
-        p,
-        xw.column_iter().map(|c| {
-            let n = c.norm();
-            if n > 0.0 { 1.0 / n } else { 1.0 }
-        }),
-    );
-    for (j, s) in scale.iter().enumerate() {
-        xw.column_mut(j).scale_mut(*s);
-    }
-    let yw = y.component_mul(w);
-    let (r, qty) = if n >= p {
-        let qr = xw.qr();
-        let mut qty = yw.clone();
-        qr.q_tr_mul(&mut qty);
-        qty.resize_vertically_mut(p, 0.0);
-        (qr.r(), qty)
+    let (r, qty, scale) = if n > QR_BLOCK {
+        whitened_r_streamed(x, y, w)
     } else {
-        (xw.clone(), yw.clone())
+        whitened_r(x, y, w)
     };
     let svd = r.svd(true, true);
     let (u, vt) = (svd.u.expect("requested"), svd.v_t.expect("requested"));
@@ -130,6 +112,103 @@ pub(crate) fn solve(x: &DMat, y: &DVec, w: &DVec) -> Solution {
     }
 }
 
+/// R and Qᵀy of the whitened, column-normalised design and observations (Householder QR of
+/// the whole design), with the column scale factors.
+fn whitened_r(x: &DMat, y: &DVec, w: &DVec) -> (DMat, DVec, DVec) {
+    let (n, p) = x.shape();
+    let mut xw = x.clone();
+    for (i, wi) in w.iter().enumerate() {
+        xw.row_mut(i).scale_mut(*wi);
+    }
+    let scale: DVec = DVec::from_iterator(
+        p,
+        xw.column_iter().map(|c| {
+            let n = c.norm();
+            if n > 0.0 { 1.0 / n } else { 1.0 }
+        }),
+    );
+    for (j, s) in scale.iter().enumerate() {
+        xw.column_mut(j).scale_mut(*s);
+    }
+    let yw = y.component_mul(w);
+    if n >= p {
+        let qr = xw.qr();
+        let mut qty = yw.clone();
+        qr.q_tr_mul(&mut qty);
+        qty.resize_vertically_mut(p, 0.0);
+        (qr.r(), qty, scale)
+    } else {
+        (xw, yw, scale)
+    }
+}
+
+/// [`whitened_r`] for a long record: the design is whitened row by row into the blocks of a
+/// streamed QR with the observations as a last column, so no copy of it is made.
+fn whitened_r_streamed(x: &DMat, y: &DVec, w: &DVec) -> (DMat, DVec, DVec) {
+    let (n, p) = x.shape();
+    let scale: DVec = DVec::from_iterator(
+        p,
+        x.column_iter().map(|c| {
+            let n = c
+                .iter()
+                .zip(w.iter())
+                .map(|(v, w)| (v * w).powi(2))
+                .sum::<f64>()
+                .sqrt();
+            if n > 0.0 { 1.0 / n } else { 1.0 }
+        }),
+    );
+    let ra = streamed_r(n, p + 1, &|i, out| {
+        for j in 0..p {
+            out[j] = x[(i, j)] * w[i] * scale[j];
+        }
+        out[p] = y[i] * w[i];
+    });
+    (
+        ra.view((0, 0), (p, p)).into_owned(),
+        ra.view((0, p), (p, 1)).column(0).into_owned(),
+        scale,
+    )
+}
+
+/// Rows per block of [`streamed_r`].
+const QR_BLOCK: usize = 32_768;
+
+/// The triangular factor R (m × m) of the thin QR of the n × m matrix (n ≥ m) whose row `i`
+/// `row(i, ·)` writes, in blocks of rows: R of the matrix stacked on the previous blocks' R
+/// (the tall-skinny QR), so memory stays at a block whatever the length of the record.
+pub(crate) fn streamed_r(n: usize, m: usize, row: &dyn Fn(usize, &mut [f64])) -> DMat {
+    let mut r: Option<DMat> = None;
+    let mut buffer = vec![0.0; m];
+    let mut start = 0;
+    while start < n {
+        let end = (start + QR_BLOCK).min(n);
+        let top = r.as_ref().map_or(0, DMat::nrows);
+        let mut block = DMat::zeros(top + end - start, m);
+        if let Some(r) = &r {
+            block.rows_mut(0, top).copy_from(r);
+        }
+        for i in start..end {
+            row(i, &mut buffer);
+            for (j, v) in buffer.iter().enumerate() {
+                block[(top + i - start, j)] = *v;
+            }
+        }
+        r = Some(if block.nrows() >= m {
+            mte_linalg::lstsq::qr_r(&block)
+        } else {
+            block
+        });
+        start = end;
+    }
+    let r = r.unwrap_or_else(|| DMat::zeros(0, m));
+    // Fewer rows than columns only when n < m, which the callers exclude.
+    let mut full = DMat::zeros(m, m);
+    full.rows_mut(0, r.nrows().min(m))
+        .copy_from(&r.rows(0, r.nrows().min(m)));
+    full
+}
+
 /// Rows of `m` selected by `rows`.
 pub(crate) fn select_rows(m: &DMat, rows: &[usize]) -> DMat {
     DMat::from_fn(rows.len(), m.ncols(), |i, j| m[(rows[i], j)])
@@ -140,8 +219,8 @@ fn select(v: &DVec, rows: &[usize]) -> DVec {
 }
 
 /// Blocked K-fold cross-validation: the acquisition order of the included observations is cut
-/// into contiguous blocks and every K-th block is held out together, so a fold never sees the
-/// neighbours of its test points on either side of a block boundary within the block.
+/// into contiguous blocks and every K-th block (counted from a different start in each set-up)
+/// is held out together, so a fold never sees the neighbours of its test points within a block.
 #[derive(Debug, Clone)]
 pub(crate) struct Folds {
     pub test: Vec<Vec<usize>>,
@@ -165,9 +244,12 @@ impl Folds {
         let n = order.len();
         let n_blocks = (k * blocks_per_fold).min(n).max(k);
         let mut test = vec![Vec::new(); k];
+        // Each set-up's blocks start at a different fold: when the set-ups repeat one programme
+        // (runs over the same targets), the fold would otherwise hold the same stretch of the
+        // programme in every set-up, and no other fold would ever see those poses.
         for (pos, &i) in order.iter().enumerate() {
             let block = pos * n_blocks / n;
-            test[block % k].push(i);
+            test[(block + obs.setup[i]) % k].push(i);
         }
         let train = test
             .iter()
@@ -224,10 +306,14 @@ pub(crate) fn max_abs(v: &DVec) -> f64 {
     v.iter().fold(0.0_f64, |m, x| m.max(x.abs()))
 }
 
-/// An orthonormal basis of the whitened current model, to project candidates against.
+/// An orthonormal basis of the whitened current model and its residuals, to project candidates
+/// against.
 pub(crate) struct Projector {
     q: DMat,
     w: DVec,
+    /// Whitened residuals and their components along the basis.
+    rw: DVec,
+    qtr: DVec,
 }
 
 /// What a candidate adds beyond the current model.
@@ -242,14 +328,35 @@ pub(crate) struct Increment {
     pub separability: f64,
 }
 
+/// `aᵀ b`, the inner loop of every scan: on a long record by faer's blocked, vectorised product.
+fn tr_mul(a: &DMat, b: &DMat) -> DMat {
+    if a.nrows() <= QR_BLOCK {
+        return a.tr_mul(b);
+    }
+    let product = as_faer(a).transpose() * as_faer(b);
+    faer_to_dmat(product.as_ref())
+}
+
 impl Projector {
-    pub fn new(x: &DMat, w: &DVec) -> Projector {
+    /// The model with design `x`, weights `w` and residuals `r`.
+    pub fn new(x: &DMat, w: &DVec, r: &DVec) -> Projector {
         let mut xw = x.clone();
         for (i, wi) in w.iter().enumerate() {
             xw.row_mut(i).scale_mut(*wi);
         }
         let q = orthonormal_basis(&xw);
-        Projector { q, w: w.clone() }
+        let rw = r.component_mul(w);
+        let qtr = if q.ncols() > 0 {
+            q.tr_mul(&rw)
+        } else {
+            DVec::zeros(0)
+        };
+        Projector {
+            q,
+            w: w.clone(),
+            rw,
+            qtr,
+        }
     }
 
     /// Whitened `c` with the current model projected out.
@@ -259,19 +366,19 @@ impl Projector {
             cw.row_mut(i).scale_mut(*wi);
         }
         if self.q.ncols() > 0 {
-            let coef = self.q.tr_mul(&cw);
+            let coef = tr_mul(&self.q, &cw);
             cw -= &self.q * coef;
         }
         cw
     }
 
-    /// How much the candidate `c` would reduce the weighted RSS of residuals `r`.
+    /// How much the candidate `c` would reduce the weighted RSS of the residuals.
     ///
     /// Works on the k × k Gram matrix of the candidate's whitened columns with the model
     /// projected out, `G = CᵀC − (QᵀC)ᵀ(QᵀC)`, normalised by the columns' norms: its smallest
     /// eigenvalue is the squared separability, and the RSS falls by `bᵀ G⁺ b` with
     /// `b = Cᵀr − (QᵀC)ᵀ(Qᵀr)`. No n × k matrix beyond the whitened columns is formed.
-    pub fn increment(&self, c: &DMat, r: &DVec) -> Increment {
+    pub fn increment(&self, c: &DMat) -> Increment {
         let k = c.ncols();
         let none = Increment {
             delta_rss: 0.0,
@@ -289,13 +396,12 @@ impl Projector {
         if norms.iter().any(|n| n.is_nan() || *n <= 0.0) {
             return none;
         }
-        let rw = r.component_mul(&self.w);
         let mut g = cw.tr_mul(&cw);
-        let mut b = cw.tr_mul(&rw);
+        let mut b = cw.tr_mul(&self.rw);
         if self.q.ncols() > 0 {
-            let a = self.q.tr_mul(&cw);
+            let a = tr_mul(&self.q, &cw);
             g -= a.tr_mul(&a);
-            b -= a.tr_mul(&self.q.tr_mul(&rw));
+            b -= a.tr_mul(&self.qtr);
         }
         for i in 0..k {
             b[i] /= norms[i];
@@ -324,16 +430,108 @@ impl Projector {
     }
 }
 
-/// Orthonormal basis of the column space of `a` (thin SVD, relative tolerance).
+/// Orthonormal basis of the column space of `a` (relative tolerance). For a tall `a`: the
+/// streamed QR's `R = U S Vᵀ` gives the left singular vectors as `a V S⁻¹` (restricted to the
+/// kept directions), orthogonalised once more by a second streamed QR — memory stays at two
+/// copies of `a` on a long record; up to [`QR_BLOCK`] rows from the SVD of `a`.
 pub(crate) fn orthonormal_basis(a: &DMat) -> DMat {
-    if a.ncols() == 0 {
-        return DMat::zeros(a.nrows(), 0);
+    let (n, p) = a.shape();
+    if p == 0 {
+        return DMat::zeros(n, 0);
     }
-    let svd = a.clone().svd(true, false);
+    if n <= QR_BLOCK {
+        let svd = a.clone().svd(true, false);
+        let smax = svd.singular_values.max();
+        let u = svd.u.expect("requested");
+        let keep: Vec<usize> = (0..svd.singular_values.len())
+            .filter(|&k| svd.singular_values[k] > 1e-9 * smax && smax > 0.0)
+            .collect();
+        return DMat::from_fn(n, keep.len(), |i, j| u[(i, keep[j])]);
+    }
+    let r = streamed_r(n, p, &|i, out| {
+        for (j, o) in out.iter_mut().enumerate() {
+            *o = a[(i, j)];
+        }
+    });
+    let svd = r.svd(false, true);
+    let vt = svd.v_t.expect("requested");
     let smax = svd.singular_values.max();
-    let u = svd.u.expect("requested");
     let keep: Vec<usize> = (0..svd.singular_values.len())
         .filter(|&k| svd.singular_values[k] > 1e-9 * smax && smax > 0.0)
         .collect();
-    DMat::from_fn(a.nrows(), keep.len(), |i, j| u[(i, keep[j])])
+    let k = keep.len();
+    let map = DMat::from_fn(p, k, |i, j| vt[(keep[j], i)] / svd.singular_values[keep[j]]);
+    let q1 = faer_to_dmat((as_faer(a) * as_faer(&map)).as_ref());
+    // A second pass removes the loss of orthogonality of the first (ε · condition number).
+    let r2 = streamed_r(n, k, &|i, out| {
+        for (j, o) in out.iter_mut().enumerate() {
+            *o = q1[(i, j)];
+        }
+    });
+    let Some(inv) = r2.try_inverse().filter(|m| m.iter().all(|v| v.is_finite())) else {
+        return q1;
+    };
+    // Q = Q₁ R₂⁻¹ row by row, in place.
+    let mut q = q1;
+    let mut buffer = vec![0.0; k];
+    for i in 0..n {
+        for (j, b) in buffer.iter_mut().enumerate() {
+            *b = (0..=j).map(|l| q[(i, l)] * inv[(l, j)]).sum();
+        }
+        for (j, b) in buffer.iter().enumerate() {
+            q[(i, j)] = *b;
+        }
+    }
+    q
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A smooth, deterministic design of `n` rows: a constant, Legendre-like powers and a sine,
+    /// with one column a combination of two others (rank deficient).
+    fn problem(n: usize) -> (DMat, DVec, DVec) {
+        let u = |i: usize| 2.0 * i as f64 / (n - 1) as f64 - 1.0;
+        let x = DMat::from_fn(n, 6, |i, j| match j {
+            0 => 1.0,
+            1 => u(i),
+            2 => u(i).powi(2),
+            3 => (7.3 * u(i)).sin(),
+            4 => 2.0 * u(i) - 3.0 * u(i).powi(2),
+            _ => (i % 7) as f64,
+        });
+        let y = DVec::from_fn(n, |i, _| {
+            0.3 + u(i) - 0.2 * (7.3 * u(i)).sin() + 1e-3 * ((i * 7919) % 13) as f64
+        });
+        let w = DVec::from_fn(n, |i, _| 1.0 + (i % 3) as f64);
+        (x, y, w)
+    }
+
+    #[test]
+    fn streamed_qr_matches_the_householder_qr() {
+        let n = 3 * QR_BLOCK + 17;
+        let (x, y, w) = problem(n);
+        let (r1, qty1, _) = whitened_r(&x, &y, &w);
+        let (r2, qty2, _) = whitened_r_streamed(&x, &y, &w);
+        // RᵀR = AᵀA and Rᵀ(Qᵀy) = Aᵀy whatever the signs (and, with a dependent column, the
+        // undetermined trailing rows) of R.
+        let (g1, g2) = (r1.tr_mul(&r1), r2.tr_mul(&r2));
+        assert!((&g1 - &g2).norm() < 1e-12 * g1.norm());
+        let (b1, b2) = (r1.tr_mul(&qty1), r2.tr_mul(&qty2));
+        assert!((&b1 - &b2).norm() < 1e-12 * b1.norm());
+    }
+
+    #[test]
+    fn long_record_basis_is_orthonormal_and_spans_the_design() {
+        let n = 2 * QR_BLOCK + 5;
+        let (x, _, _) = problem(n);
+        let q = orthonormal_basis(&x);
+        assert_eq!(q.ncols(), 5, "one column is a combination of two others");
+        let gram = q.tr_mul(&q);
+        assert!((gram - DMat::identity(5, 5)).norm() < 1e-12);
+        // Every column of the design lies in the span.
+        let rest = &x - &q * q.tr_mul(&x);
+        assert!(rest.norm() / x.norm() < 1e-10);
+    }
 }

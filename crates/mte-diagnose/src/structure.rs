@@ -36,7 +36,9 @@ impl StructureTest {
     }
 }
 
-/// Runs every structure test on the residuals `r` of the model whose design is `x`.
+/// Runs every structure test on the residuals `r` of the model whose design is `x`. On a long
+/// record the period scans choose their period on the observations `scan_rows` (evenly thinned)
+/// and test it on all; the Bonferroni factor counts the whole scan either way.
 pub(crate) fn structure_tests(
     obs: &Observations,
     x: &DMat,
@@ -44,8 +46,21 @@ pub(crate) fn structure_tests(
     w: &DVec,
     rss_w: f64,
     dof: usize,
+    scan_rows: Option<&[usize]>,
 ) -> Vec<StructureTest> {
-    let projector = Projector::new(x, w);
+    let projector = Projector::new(x, w, r);
+    // Where the period scans run: all observations, or the thinned ones.
+    let thin = scan_rows.map(|rows| {
+        let pick = |v: &DVec| DVec::from_iterator(rows.len(), rows.iter().map(|&i| v[i]));
+        (
+            obs.select(rows),
+            Projector::new(&crate::fit::select_rows(x, rows), &pick(w), &pick(r)),
+        )
+    });
+    let (scan_obs, scan_projector) = match &thin {
+        Some((o, p)) => (o, p),
+        None => (obs, &projector),
+    };
     let n = obs.len();
     let mut raw: Vec<(StructureTest, f64)> = Vec::new(); // (test, number of hypotheses inside it)
     let channels: Vec<usize> = (0..obs.channel_names.len()).collect();
@@ -60,7 +75,7 @@ pub(crate) fn structure_tests(
         for (i, m) in mask.iter().enumerate() {
             c.row_mut(i).scale_mut(*m);
         }
-        let inc = projector.increment(&c, r);
+        let inc = projector.increment(&c);
         if inc.new_rank == 0 || dof <= inc.new_rank {
             return None;
         }
@@ -99,18 +114,22 @@ pub(crate) fn structure_tests(
                         1.0,
                     );
                     if v.kind != VariableKind::Time {
-                        let periods =
-                            periods_to_scan(&v.values, v.kind == VariableKind::RotaryAxis);
+                        let rotary = v.kind == VariableKind::RotaryAxis;
+                        let scan_values = &scan_obs
+                            .variable(&v.name)
+                            .expect("the thinned observations have the same variables")
+                            .values;
+                        let periods = periods_to_scan(scan_values, rotary);
                         let mut best: Option<(f64, f64)> = None;
                         for &p in &periods {
                             let inc = {
-                                let mut c = sin_cos_columns(&v.values, p);
-                                for i in 0..n {
-                                    if obs.channel[i] != ch {
+                                let mut c = sin_cos_columns(scan_values, p);
+                                for (i, &channel) in scan_obs.channel.iter().enumerate() {
+                                    if channel != ch {
                                         c.row_mut(i).fill(0.0);
                                     }
                                 }
-                                projector.increment(&c, r).delta_rss
+                                scan_projector.increment(&c).delta_rss
                             };
                             if best.is_none_or(|(_, d)| inc > d) {
                                 best = Some((p, inc));
@@ -122,14 +141,7 @@ pub(crate) fn structure_tests(
                                 ch,
                                 "periodic",
                                 sin_cos_columns(&v.values, p),
-                                Some((
-                                    p,
-                                    if v.kind == VariableKind::RotaryAxis {
-                                        "°"
-                                    } else {
-                                        "mm"
-                                    },
-                                )),
+                                Some((p, if rotary { "°" } else { "mm" })),
                                 periods.len() as f64,
                             );
                         }

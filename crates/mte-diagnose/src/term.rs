@@ -208,6 +208,28 @@ pub struct Estimate {
 }
 
 impl Term {
+    /// The term on the observations `rows` only (their rows of the columns, in that order).
+    pub fn select_rows(&self, rows: &[usize]) -> Term {
+        Term {
+            columns: crate::fit::select_rows(&self.columns, rows),
+            ..self.clone_without_columns()
+        }
+    }
+
+    fn clone_without_columns(&self) -> Term {
+        Term {
+            name: self.name.clone(),
+            label: self.label.clone(),
+            meaning: self.meaning.clone(),
+            family: self.family.clone(),
+            columns: DMat::zeros(0, 0),
+            coefficients: self.coefficients.clone(),
+            summary: self.summary.clone(),
+            exposed_by: self.exposed_by.clone(),
+            separated_by: self.separated_by.clone(),
+        }
+    }
+
     /// Reported estimates from the term's coefficients and their covariance block.
     pub fn estimates(&self, coef: &[f64], cov: &DMat) -> Vec<Estimate> {
         let make = |name: &str, value: f64, u: f64, quantity: Quantity| Estimate {

@@ -423,6 +423,26 @@ pub fn lstsq_qr(a: &DMat, b: &DVec) -> Result<DVec> {
     Ok(faer_col_to_dvec(x.as_ref()))
 }
 
+/// The triangular factor `R` (n × n) of the thin QR decomposition `A = Q R` of a tall `A`
+/// (m ≥ n), by faer's blocked Householder QR. Appending the right-hand side as a last column
+/// gives `Qᵀb` in that column's top rows and the residual norm in its last entry, without
+/// forming `Q`.
+///
+/// # Example
+/// ```
+/// use mte_linalg::bridge::DMat;
+/// let a = DMat::from_row_slice(3, 2, &[3.0, 1.0, 4.0, 2.0, 0.0, 2.0]);
+/// let r = mte_linalg::lstsq::qr_r(&a);
+/// // RᵀR = AᵀA
+/// assert!(((r.transpose() * &r) - a.transpose() * &a).norm() < 1e-12);
+/// ```
+pub fn qr_r(a: &DMat) -> DMat {
+    let n = a.ncols().min(a.nrows());
+    let qr = as_faer(a).qr();
+    let r = qr.thin_R();
+    DMat::from_fn(n, a.ncols(), |i, j| if i <= j { *r.get(i, j) } else { 0.0 })
+}
+
 /// Minimum-norm least squares `x = A⁺ b` (SVD): of all minimisers of ‖A x − b‖ the one with the
 /// smallest ‖x‖. Works for any shape and rank.
 ///

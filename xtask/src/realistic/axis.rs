@@ -41,8 +41,8 @@ type Part = Box<dyn Fn(f64, f64, f64) -> f64>;
 pub(crate) fn write(spec: &Spec, rng: &mut ChaCha8Rng, dir: &Path) -> std::io::Result<Truth> {
     let stroke = rng.random_range(500.0..=1000.0_f64).round();
     let n_targets = rng.random_range(15..=25);
-    let targets = irregular_targets(rng, stroke, n_targets);
-    let runs = rng.random_range(3..=5);
+    let mut targets = irregular_targets(rng, stroke, n_targets);
+    let mut runs = rng.random_range(3..=5);
     let sigma = rng.random_range(0.1..=0.6) * spec.noise_scale;
     let s = spec.ordinary_scale;
     let pos_size = rng.random_range(3.0..=20.0) * s;
@@ -53,9 +53,15 @@ pub(crate) fn write(spec: &Spec, rng: &mut ChaCha8Rng, dir: &Path) -> std::io::R
     } else {
         0.0
     };
-    let dt = rng.random_range(3.0..=6.0_f64);
+    let mut dt = rng.random_range(3.0..=6.0_f64);
     let pause = rng.random_range(10.0..=60.0_f64);
     let phase = rng.random_range(0.0..TAU);
+    if let Some((log_runs, readings)) = spec.log {
+        // Drawn after the ordinary dataset's draws: the machine is the same for a seed.
+        runs = log_runs;
+        targets = irregular_targets(rng, stroke, readings.max(2));
+        dt = 0.02;
+    }
 
     let mut effects = Vec::new();
     let mut ordinary = Vec::new();
@@ -180,8 +186,10 @@ pub(crate) fn write(spec: &Spec, rng: &mut ChaCha8Rng, dir: &Path) -> std::io::R
                 }
                 let _ = writeln!(
                     csv,
-                    "{run},{},{x:.3},{t:.1},{dev:.4}",
-                    if sign > 0.0 { "+" } else { "-" }
+                    "{run},{},{x:.3},{:.*},{dev:.4}",
+                    if sign > 0.0 { "+" } else { "-" },
+                    if spec.log.is_some() { 2 } else { 1 },
+                    t,
                 );
                 n_obs += 1;
                 t += dt;

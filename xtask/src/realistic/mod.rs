@@ -263,6 +263,9 @@ pub struct Spec {
     pub noise_scale: f64,
     /// R-test: number of measurement cycles (re-centred each cycle); `None` draws 1–3.
     pub cycles: Option<usize>,
+    /// Axis: a continuous interferometer log instead of stop-and-go targets — `(runs, readings
+    /// per direction)`, one reading every 20 ms while the axis creeps through its stroke.
+    pub log: Option<(usize, usize)>,
 }
 
 impl Spec {
@@ -276,6 +279,7 @@ impl Spec {
             ordinary_scale: 1.0,
             noise_scale: 1.0,
             cycles: None,
+            log: None,
         }
     }
 }
