@@ -48,6 +48,9 @@ pub struct Outcome {
     pub extended_held_out_rms_um: f64,
     /// The diagnosis' verdict.
     pub verdict: mte_diagnose::Verdict,
+    /// Groups of findings the diagnosis says are one effect of a form no candidate has
+    /// ([`mte_diagnose::Diagnosis::compound`]).
+    pub compound: usize,
 }
 
 /// One dataset of a study.
@@ -135,6 +138,7 @@ pub fn run_one(spec: &Spec, index: usize, seed: u64, work: &Path) -> Record {
             extended_held_out_rms_um: d.held_out.as_ref().map_or(f64::NAN, |h| h.diagnosed_rms)
                 * 1e3,
             verdict: d.verdict,
+            compound: d.compound.len(),
         });
     let _ = std::fs::remove_dir_all(&dir);
     Record {
@@ -629,7 +633,12 @@ pub struct OpenWorldSummary {
     /// Findings, but the extended model still fails the χ² test (p < 0.01) or its σ0 > 1.5:
     /// the report shows a residual it does not explain.
     pub unexplained: usize,
-    /// Findings and an extended model that passes: a confident (wrong) cause.
+    /// Findings the diagnosis itself calls one effect of a form no candidate has (harmonics of a
+    /// periodic error that is not a sine; a drift neither linear nor first-order), and an
+    /// extended model that passes: the cause named with its shape stated.
+    pub shape_stated: usize,
+    /// Findings and an extended model that passes, with no such statement: a confident (wrong)
+    /// cause.
     pub confident_wrong: usize,
     /// Most frequent finding names.
     pub names: Vec<(String, usize)>,
@@ -669,6 +678,7 @@ pub fn openworld_with(
         errors: 0,
         nothing: 0,
         unexplained: 0,
+        shape_stated: 0,
         confident_wrong: 0,
         names: Vec::new(),
     };
@@ -681,6 +691,7 @@ pub fn openworld_with(
         match o.verdict {
             mte_diagnose::Verdict::NoDiscrepancy => s.nothing += 1,
             mte_diagnose::Verdict::Unexplained => s.unexplained += 1,
+            _ if o.compound > 0 => s.shape_stated += 1,
             _ => s.confident_wrong += 1,
         }
         all_names.extend(o.findings.iter().map(|f| f.name.clone()));
@@ -857,14 +868,18 @@ Effects no candidate has exactly (sawtooth positioning error, a drift that rises
 an X straightness growing with Z). By the diagnosis' verdict: *nothing*: \"no significant \
 discrepancy\" (the effect is missed); *unexplained*: structure is reported that nothing in the \
 library explains, with or without the nearest candidates named beside it — the right answer; \
-*confident wrong cause*: causes named and the residuals declared consistent with the noise.\n\n\
-| kind | effect | size | datasets | errors | nothing | unexplained | confident wrong cause | most frequent findings |\n|---|---|---|---|---|---|---|---|---|"
+*shape stated*: causes named, and the report says that some of them are one effect of a form \
+no candidate has (the harmonics of a periodic error that is not a sine; a drift of one \
+parameter that is neither linear nor first-order) — also a right answer; *confident wrong \
+cause*: causes named, the residuals declared consistent with the noise, and no such \
+statement.\n\n\
+| kind | effect | size | datasets | errors | nothing | unexplained | shape stated | confident wrong cause | most frequent findings |\n|---|---|---|---|---|---|---|---|---|---|"
         );
         for o in &r.openworld {
             let ran = o.n - o.errors;
             let _ = writeln!(
                 s,
-                "| {} | {} | {} {} | {} | {} | {} | {} | {} | {} |",
+                "| {} | {} | {} {} | {} | {} | {} | {} | {} | {} | {} |",
                 o.kind.name(),
                 o.effect.name(),
                 o.size,
@@ -873,6 +888,7 @@ library explains, with or without the nearest candidates named beside it — the
                 o.errors,
                 pct(o.nothing, ran),
                 pct(o.unexplained, ran),
+                pct(o.shape_stated, ran),
                 pct(o.confident_wrong, ran),
                 top(&o.names, 3)
             );

@@ -210,6 +210,16 @@ pub struct ResidualSeries {
     pub effect: Vec<f64>,
 }
 
+/// Findings that together describe one effect of a form no single candidate has: the harmonics
+/// of a periodic error that is not a sine, or a linear and a first-order drift of one parameter.
+#[derive(Debug, Clone, Serialize)]
+pub struct Compound {
+    /// The sentence the report prints.
+    pub note: String,
+    /// The findings, by name.
+    pub findings: Vec<String>,
+}
+
 /// The verdict of a diagnosis.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
 #[non_exhaustive]
@@ -265,6 +275,9 @@ pub struct Diagnosis {
     pub steps: Vec<Step>,
     /// The named causes, in the order found.
     pub findings: Vec<Finding>,
+    /// Findings that together describe one effect of a form no candidate has (also in
+    /// [`Diagnosis::notes`]): the cause is named, its shape is not one of the library's.
+    pub compound: Vec<Compound>,
     /// Causes added by the search and removed again when re-tested in the complete model.
     pub pruned: Vec<String>,
     /// Candidates the data cannot separate from the model.
@@ -556,7 +569,11 @@ pub fn diagnose(
             rows.len()
         ));
     }
-    notes.extend(harmonic_families(&findings));
+    let compound: Vec<Compound> = harmonic_families(&findings)
+        .into_iter()
+        .chain(compound_drifts(&findings))
+        .collect();
+    notes.extend(compound.iter().map(|c| c.note.clone()));
     let residual_series = residual_series(
         obs,
         &findings,
@@ -584,6 +601,7 @@ pub fn diagnose(
         structure,
         steps: search.steps,
         findings,
+        compound,
         pruned,
         not_separable: search.not_separable,
         extended,
@@ -876,6 +894,11 @@ impl Searcher<'_> {
                     let t = overrides
                         .get(&(ci, vi))
                         .unwrap_or(&self.pool.variants[ci][vi]);
+                    if times_chosen[ci] > 0
+                        && near_a_component(obs, t, &chosen, self.pool.source[ci], None)
+                    {
+                        continue;
+                    }
                     let inc = projector.increment(&t.columns);
                     if inc.separability < SEPARABILITY_TOLERANCE || inc.new_rank < t.width() {
                         continue;
@@ -1071,7 +1094,9 @@ impl Searcher<'_> {
             else {
                 continue;
             };
-            if rss_with(&refined) >= rss_with(&chosen[j].term) {
+            if near_a_component(self.obs, &refined, chosen, chosen[j].candidate, Some(j))
+                || rss_with(&refined) >= rss_with(&chosen[j].term)
+            {
                 continue;
             }
             chosen[j].term = nth_component(refined, chosen[j].component);
@@ -1244,7 +1269,7 @@ fn f_test(rss: f64, delta_rss: f64, k: usize, dof: usize) -> f64 {
 /// Periodic findings of one axis whose periods are the first's divided by 2, 3, …: harmonics of
 /// one periodic error that is not a sine (a sawtooth, a pitch error with a sharp profile), said
 /// in one sentence so the reader does not take them for independent causes.
-fn harmonic_families(findings: &[Finding]) -> Vec<String> {
+fn harmonic_families(findings: &[Finding]) -> Vec<Compound> {
     let periodic: Vec<(&Finding, f64, f64)> = findings
         .iter()
         .filter_map(|f| {
@@ -1282,13 +1307,53 @@ fn harmonic_families(findings: &[Finding]) -> Vec<String> {
                 .as_ref()
                 .map(|h| h.quantity.format(h.value, h.uncertainty))
                 .unwrap_or_default();
-            notes.push(format!(
-                "{} are one periodic error of period {period} that is not a sine (its harmonics): a sawtooth or sharp-profiled pitch error, not independent causes",
-                names.join(", ")
-            ));
+            notes.push(Compound {
+                note: format!(
+                    "{} are one periodic error of period {period} that is not a sine (its harmonics): a sawtooth or sharp-profiled pitch error, not independent causes",
+                    names.join(", ")
+                ),
+                findings: members.iter().map(|(_, g)| g.name.clone()).collect(),
+            });
         }
     }
     notes
+}
+
+/// Drifts of one parameter found in two forms (linear and first-order): together they describe
+/// a course neither has — a drift that rises and falls, or speeds up — over the measured time
+/// only, which the report says in one sentence.
+fn compound_drifts(findings: &[Finding]) -> Vec<Compound> {
+    let mut out: Vec<Compound> = Vec::new();
+    for f in findings {
+        if !matches!(f.family, Family::Drift { .. }) {
+            continue;
+        }
+        let stem = f.name.split(" drift").next().unwrap_or_default();
+        if out
+            .iter()
+            .any(|c| c.findings[0].split(" drift").next() == Some(stem))
+        {
+            continue;
+        }
+        let members: Vec<String> = findings
+            .iter()
+            .filter(|g| {
+                matches!(g.family, Family::Drift { .. })
+                    && g.name.split(" drift").next() == Some(stem)
+            })
+            .map(|g| g.name.clone())
+            .collect();
+        if members.len() > 1 {
+            out.push(Compound {
+                note: format!(
+                    "{} are one drift of {stem} whose course is neither linear nor a first-order settling (it may rise and fall): together they describe it over the measured time, not beyond it",
+                    members.join(" and ")
+                ),
+                findings: members,
+            });
+        }
+    }
+    out
 }
 
 /// The period or time constant of a term, with the quantity it is reported in (a period along a
@@ -1446,6 +1511,39 @@ const REFINE_LEVEL: f64 = 1e3;
 
 /// Periodic components one slot may show (pitch, a longer wave of the screw, a harmonic).
 const MAX_PERIODIC_COMPONENTS: usize = 3;
+
+/// `true` when the periodic term `t` of candidate `candidate` has a period within the Fourier
+/// resolution (1 / range of its axis) of a component of the same cause already chosen (other
+/// than `skip`): two such components are one wave with a slowly changing amplitude, not two
+/// causes, and their sizes would split one effect.
+fn near_a_component(
+    obs: &Observations,
+    t: &Term,
+    chosen: &[Chosen],
+    candidate: usize,
+    skip: Option<usize>,
+) -> bool {
+    let Family::Periodic { period } = t.family else {
+        return false;
+    };
+    let Some(span) = t
+        .exposed_by
+        .as_deref()
+        .and_then(|v| obs.variable(v))
+        .map(|v| {
+            let (lo, hi) = crate::basis::range(&v.values);
+            hi - lo
+        })
+    else {
+        return false;
+    };
+    chosen.iter().enumerate().any(|(k, c)| {
+        Some(k) != skip
+            && c.candidate == candidate
+            && matches!(c.term.family, Family::Periodic { period: q }
+                if (1.0 / period - 1.0 / q).abs() < 1.0 / span)
+    })
+}
 
 /// The `k`-th further component of a recurring cause (`k` = 0 is the first, unchanged): its
 /// own name and coefficient names, so reports and parameter tables tell the components apart.

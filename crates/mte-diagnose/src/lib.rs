@@ -17,7 +17,9 @@ pub use candidate::{
     physical_effects,
 };
 pub use data::{Observations, Variable, VariableKind};
-pub use engine::{DiagnoseParams, Diagnosis, Finding, FitQuality, HeldOut, Verdict, diagnose};
+pub use engine::{
+    Compound, DiagnoseParams, Diagnosis, Finding, FitQuality, HeldOut, Verdict, diagnose,
+};
 pub use instruments::{load, load_with_noise};
 pub use model::{DriftOf, Effects, ObservationModel, Prepared, prepare};
 pub use structure::StructureTest;

@@ -176,7 +176,9 @@ fn draw_stations(rng: &mut impl Rng, strokes: [(f64, f64); 3]) -> Vec<V3> {
     (0..n)
         .map(|i| {
             let phi = phi0 + TAU * i as f64 / n as f64 + rng.random_range(-0.3..0.3);
-            let r = (half_diag + 200.0) * rng.random_range(0.9..1.4);
+            // 250–700 mm outside the volume's circumscribed circle: every line of sight is
+            // longer than the largest dead path (150 mm) plus a margin, as a tracker needs.
+            let r = half_diag + rng.random_range(250.0..700.0);
             let z = c.z + rng.random_range(-0.8..0.8) * sz;
             V3::new(c.x + r * phi.cos(), c.y + r * phi.sin(), z)
         })
