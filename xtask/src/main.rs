@@ -1,7 +1,7 @@
 //! `cargo xtask reproduce [seed000|seed002|seed003|seed004|all] [--check]`,
 //! `cargo xtask reproduce seed003 --timing` (writes `docs/reproduction/seed003-timing.md`) and
 //! `cargo xtask bench [-- criterion args]` and
-//! `cargo xtask study [fdr|power|coverage|openworld|all] [--n N] [--n-power M] [--seed S] [--kind axis|tracker|rtest] [--base-model omit] [--out FILE]`.
+//! `cargo xtask study [fdr|power|coverage|openworld|all] [--n N] [--n-power M] [--seed S] [--kind axis|tracker|rtest|points] [--base-model omit] [--out FILE]`.
 //!
 //! The generators are in the library target (`xtask::reproduce`), so the staleness test in
 //! `tests/reproduction_up_to_date.rs` runs the very same code.
@@ -9,7 +9,7 @@
 use std::process::{Command, ExitCode};
 use xtask::reproduce::{self, Freshness, PAPERS};
 
-const USAGE: &str = "usage: cargo xtask <reproduce [seed000|seed002|seed003|seed004|all] [--check] | reproduce seed003 --timing | bench [-- criterion args] | bench-diagnose [--rows N] [--seed S] | study [fdr|power|coverage|openworld|all] [--n N] [--n-power M] [--seed S] [--kind axis|tracker|rtest] [--base-model omit] [--out FILE]>";
+const USAGE: &str = "usage: cargo xtask <reproduce [seed000|seed002|seed003|seed004|all] [--check] | reproduce seed003 --timing | bench [-- criterion args] | bench-diagnose [--rows N] [--seed S] | study [fdr|power|coverage|openworld|all] [--n N] [--n-power M] [--seed S] [--kind axis|tracker|rtest|points] [--base-model omit] [--out FILE]>";
 
 /// `cargo xtask realistic <axis|tracker|rtest|points> <seed> <dir>`: writes one clean realistic
 /// dataset (every ordinary error, no hidden effect) for trying `mte diagnose` or timing it;
@@ -168,7 +168,10 @@ fn run_study(args: &[String]) -> Result<(), String> {
                         "axis" => vec![Kind::Axis],
                         "tracker" => vec![Kind::Tracker],
                         "rtest" => vec![Kind::Rtest],
-                        other => return Err(format!("--kind: `{other}` (axis|tracker|rtest)")),
+                        "points" => vec![Kind::Points],
+                        other => {
+                            return Err(format!("--kind: `{other}` (axis|tracker|rtest|points)"));
+                        }
                     }
                 }
                 "--base-model" => {

@@ -86,3 +86,47 @@ fn an_unknown_target_offset_leaves_the_line_position_not_separable() {
         "not separable: {dropped:?}"
     );
 }
+
+/// The realistic points generator (every ordinary error of the machine) against the diagnosis'
+/// own kinematics: without errors and noise the points fit the nominal machine to rounding;
+/// with all ordinary errors and the user's standard model nothing is named and σ0 ≈ 1.
+#[test]
+fn realistic_points_fit_the_nominal_machine_and_name_nothing_when_clean() {
+    use xtask::realistic::{Kind, Spec, write_spec};
+    let dir = std::env::temp_dir().join(format!("mte-points-realistic-{}", std::process::id()));
+    let mut perfect = Spec::new(Kind::Points, &[]);
+    perfect.ordinary_scale = 0.0;
+    perfect.noise_scale = 0.0;
+    let truth = write_spec(&perfect, 5, &dir.join("perfect")).unwrap();
+    let p = load(&truth.manifest).unwrap();
+    let d = diagnose(
+        &p.observations,
+        p.base,
+        &p.candidates,
+        &DiagnoseParams::default(),
+    )
+    .unwrap();
+    // Coordinates are printed to 0.01 µm.
+    assert!(d.base.rms < 2e-5, "residual RMS {} mm", d.base.rms);
+
+    let truth = write_spec(&Spec::new(Kind::Points, &[]), 6, &dir.join("clean")).unwrap();
+    let p = load(&truth.manifest).unwrap();
+    let d = diagnose(
+        &p.observations,
+        p.base,
+        &p.candidates,
+        &DiagnoseParams::default(),
+    )
+    .unwrap();
+    let _ = std::fs::remove_dir_all(&dir);
+    assert!(
+        d.findings.is_empty(),
+        "{:?}",
+        d.findings.iter().map(|f| &f.name).collect::<Vec<_>>()
+    );
+    assert!(
+        (0.7..1.4).contains(&d.extended.sigma0),
+        "σ0 = {}",
+        d.extended.sigma0
+    );
+}

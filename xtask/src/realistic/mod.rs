@@ -41,18 +41,22 @@ pub enum Kind {
     Tracker,
     /// ISO 10791-6 R-test of a B/C trunnion (table–table) five-axis machine (`mte-rtest/1`).
     Rtest,
+    /// 3-D points of a target on the spindle of a C-table machine with X, Y, Z stages
+    /// (`mte-dataset/1`, `"kind": "points"`), clean datasets only.
+    Points,
 }
 
 impl Kind {
     /// All kinds.
-    pub const ALL: [Kind; 3] = [Kind::Axis, Kind::Tracker, Kind::Rtest];
+    pub const ALL: [Kind; 4] = [Kind::Axis, Kind::Tracker, Kind::Rtest, Kind::Points];
 
-    /// Lower-case name (`axis`, `tracker`, `rtest`).
+    /// Lower-case name (`axis`, `tracker`, `rtest`, `points`).
     pub fn name(self) -> &'static str {
         match self {
             Kind::Axis => "axis",
             Kind::Tracker => "tracker",
             Kind::Rtest => "rtest",
+            Kind::Points => "points",
         }
     }
 }
@@ -318,6 +322,7 @@ pub fn write_spec(spec: &Spec, seed: u64, dir: &Path) -> std::io::Result<Truth> 
         Kind::Axis => axis::write(spec, &mut rng, dir),
         Kind::Tracker => tracker::write(spec, &mut rng, dir),
         Kind::Rtest => rtest::write(spec, &mut rng, dir),
+        Kind::Points => points::write(spec, &mut rng, dir),
     }
 }
 

@@ -158,3 +158,129 @@ fn machine_json() -> serde_json::Value {
         ]
     })
 }
+
+/// A clean realistic points dataset of the same machine (for the false-discovery study): every
+/// ordinary error at once — the six component errors of each of X, Y and Z as random smooth
+/// functions, the three squareness errors between them, the C line's four location errors and
+/// C's six error motions (periodic over a turn) — measured on a richer programme (12 angles of
+/// C, 5 × 4 × 3 positions of X, Y, Z, two instrument set-ups) with a calibrated target. Hidden
+/// effects are not available for this kind.
+pub(crate) fn write(
+    spec: &super::Spec,
+    rng: &mut ChaCha8Rng,
+    dir: &Path,
+) -> std::io::Result<super::Truth> {
+    use super::geom::{LinearErrors, REALISTIC};
+    use super::smooth::Periodic;
+    if let Some(h) = spec.hidden.first() {
+        return Err(super::unsupported(super::Kind::Points, h));
+    }
+    let s = spec.ordinary_scale;
+    let strokes = [(-300.0, 300.0), (-300.0, 300.0), (-300.0, 100.0)];
+    let [ex, ey, ez] =
+        [0, 1, 2].map(|k| LinearErrors::draw(rng, k, strokes[k].0, strokes[k].1, REALISTIC, s));
+    let squareness = [0; 3].map(|_| signed(rng, 5.0, 60.0) * 1e-6 * s);
+    let (dx, dy) = (
+        signed(rng, 10.0, 40.0) * 1e-3 * s,
+        signed(rng, 10.0, 40.0) * 1e-3 * s,
+    );
+    let (a, b) = (
+        signed(rng, 20.0, 80.0) * 1e-6 * s,
+        signed(rng, 20.0, 80.0) * 1e-6 * s,
+    );
+    let motion_d = [0; 3].map(|_| {
+        let size = rng.random_range(1.0..5.0) * 1e-3 * s;
+        Periodic::draw(rng, size)
+    });
+    let motion_e = [0; 3].map(|_| {
+        let size = rng.random_range(2.0..20.0) * 1e-6 * s;
+        Periodic::draw(rng, size)
+    });
+    let noise_um = rng.random_range(0.5..2.0) * spec.noise_scale;
+    let target_mm = V3::new(
+        rng.random_range(-30.0..30.0),
+        rng.random_range(-30.0..30.0),
+        rng.random_range(-60.0..-20.0),
+    );
+    // Tool side: bed → Y → (squareness) → X → (squareness) → Z → tool, each carriage moved by
+    // its nominal translation, then its error transform.
+    let tool = |x: f64, y: f64, z: f64| -> Iso {
+        trans(V3::new(0.0, y, 0.0))
+            * ey.at(y)
+            * rot(V3::new(0.0, 0.0, squareness[0]))
+            * trans(V3::new(x, 0.0, 0.0))
+            * ex.at(x)
+            * rot(V3::new(squareness[1], squareness[2], 0.0))
+            * trans(V3::new(0.0, 0.0, z + TOOL_MM))
+            * ez.at(z)
+            * trans(V3::new(0.0, 0.0, -TOOL_MM))
+    };
+    // Workpiece side: the C line displaced and tilted, the table turned by −C, then C's error
+    // motions.
+    let table = |c_deg: f64| -> Iso {
+        let c = c_deg.to_radians();
+        let d = V3::new(motion_d[0].at(c), motion_d[1].at(c), motion_d[2].at(c));
+        let e = V3::new(motion_e[0].at(c), motion_e[1].at(c), motion_e[2].at(c));
+        trans(V3::new(dx, dy, 0.0)) * rot(V3::new(a, b, 0.0)) * rot_z(-c) * trans(d) * rot(e)
+    };
+    let noise = Normal::new(0.0, (noise_um * 1e-3).max(1e-300)).expect("finite σ");
+    let mut csv = String::from("setup,x_mm,y_mm,z_mm,c_deg,point_x_mm,point_y_mm,point_z_mm\n");
+    let mut rows = 0;
+    for setup in ["S1", "S2"] {
+        let pose = trans(V3::new(
+            rng.random_range(-300.0..300.0),
+            rng.random_range(-300.0..300.0),
+            rng.random_range(-100.0..100.0),
+        )) * rot(V3::new(
+            rng.random_range(-1.0..1.0),
+            rng.random_range(-1.0..1.0),
+            rng.random_range(-3.0..3.0),
+        ));
+        for k in 0..12 {
+            // Rounded as printed: the readings are computed at the angle the file states.
+            let c = ((30.0 * k as f64 + rng.random_range(-5.0..5.0)) * 1e4).round() / 1e4;
+            for x in [-250.0, -120.0, 0.0, 130.0, 250.0] {
+                for y in [-240.0, -80.0, 90.0, 250.0] {
+                    for z in [-260.0, -110.0, 60.0] {
+                        let p = tool(x, y, z).transform_point(&target_mm.into());
+                        let m = pose.inverse_transform_point(&table(c).inverse_transform_point(&p));
+                        let mut v = m.coords;
+                        if noise_um > 0.0 {
+                            v += V3::from_fn(|_, _| noise.sample(rng));
+                        }
+                        csv.push_str(&format!(
+                            "{setup},{x:.3},{y:.3},{z:.3},{c:.4},{:.5},{:.5},{:.5}\n",
+                            v.x, v.y, v.z
+                        ));
+                        rows += 1;
+                    }
+                }
+            }
+        }
+    }
+    std::fs::write(dir.join("points.csv"), csv)?;
+    std::fs::write(
+        dir.join("machine.json"),
+        serde_json::to_string_pretty(&machine_json())?,
+    )?;
+    let manifest = serde_json::json!({
+        "format": "mte-dataset/1",
+        "kind": "points",
+        "description": "3-D points of a target on the spindle side, measured from the C table (simulated realistic machine)",
+        "machine": "machine.json",
+        "data": "points.csv",
+        "noise_um": super::axis::stated_noise_um(noise_um.max(0.05)),
+        "target": "tool",
+        "target_mm": [target_mm.x, target_mm.y, target_mm.z],
+    });
+    let path = super::write_manifest(dir, manifest, &spec.base_model)?;
+    Ok(super::Truth {
+        kind: super::Kind::Points,
+        manifest: path,
+        effects: Vec::new(),
+        ordinary: Vec::new(),
+        noise_um,
+        stations: Vec::new(),
+        n_observations: 3 * rows,
+    })
+}
