@@ -271,6 +271,26 @@ fn generators_are_deterministic_and_hide_the_truth() {
                 um: 10.0,
                 tau_s: 900.0,
             }],
+            // Clean datasets only: deterministic for a seed, and no hidden effect accepted.
+            Kind::Points => {
+                let (a, b) = (tmp("points-a"), tmp("points-b"));
+                write(kind, &[], 11, &a).unwrap();
+                write(kind, &[], 11, &b).unwrap();
+                for f in ["manifest.json", "points.csv", "machine.json"] {
+                    assert_eq!(
+                        std::fs::read(a.join(f)).unwrap(),
+                        std::fs::read(b.join(f)).unwrap(),
+                        "{f}"
+                    );
+                }
+                let pitch = Hidden::Pitch {
+                    axis: 0,
+                    amplitude_um: 1.0,
+                    period_mm: 20.0,
+                };
+                assert!(write(kind, &[pitch], 11, &tmp("points-c")).is_err());
+                continue;
+            }
         };
         let (a, b, c) = (
             tmp(&format!("{}-a", kind.name())),
