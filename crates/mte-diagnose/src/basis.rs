@@ -175,6 +175,14 @@ pub(crate) fn time_constants_to_scan(times: &[f64], floor: f64) -> Vec<f64> {
         .collect()
 }
 
+/// SplitMix64's output function of `i`: a well-mixed deterministic pseudo-random integer.
+pub(crate) fn splitmix64(i: u64) -> u64 {
+    let mut z = i.wrapping_add(1).wrapping_mul(0x9E37_79B9_7F4A_7C15);
+    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+    z ^ (z >> 31)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -217,13 +225,5 @@ mod tests {
         assert_eq!(alias_period(&x, 1.0), None);
         let p = periods_to_scan(&x, false);
         assert!(p[0] < 5.0 && p[0] >= 1.0, "shortest period {}", p[0]);
-    }
-
-    /// SplitMix64's output function: a well-mixed deterministic pseudo-random integer.
-    fn splitmix64(i: u64) -> u64 {
-        let mut z = i.wrapping_add(1).wrapping_mul(0x9E37_79B9_7F4A_7C15);
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
     }
 }

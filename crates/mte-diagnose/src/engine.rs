@@ -622,15 +622,7 @@ fn thin_rows(order: &[usize], most: usize) -> Vec<usize> {
     let mut rows: Vec<usize> = order
         .chunks(step)
         .enumerate()
-        .map(|(b, block)| {
-            let mut z = (b as u64)
-                .wrapping_add(1)
-                .wrapping_mul(0x9E37_79B9_7F4A_7C15);
-            z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-            z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-            z ^= z >> 31;
-            block[(z % block.len() as u64) as usize]
-        })
+        .map(|(b, block)| block[(crate::basis::splitmix64(b as u64) % block.len() as u64) as usize])
         .collect();
     rows.sort_unstable();
     rows
