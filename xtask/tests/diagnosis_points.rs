@@ -97,27 +97,22 @@ fn realistic_points_fit_the_nominal_machine_and_name_nothing_when_clean() {
     let mut perfect = Spec::new(Kind::Points, &[]);
     perfect.ordinary_scale = 0.0;
     perfect.noise_scale = 0.0;
-    let truth = write_spec(&perfect, 5, &dir.join("perfect")).unwrap();
-    let p = load(&truth.manifest).unwrap();
-    let d = diagnose(
-        &p.observations,
-        p.base,
-        &p.candidates,
-        &DiagnoseParams::default(),
-    )
-    .unwrap();
+    let diagnosed = |spec: &Spec, seed: u64, name: &str| {
+        let truth = write_spec(spec, seed, &dir.join(name)).unwrap();
+        let p = load(&truth.manifest).unwrap();
+        diagnose(
+            &p.observations,
+            p.base,
+            &p.candidates,
+            &DiagnoseParams::default(),
+        )
+        .unwrap()
+    };
+    let d = diagnosed(&perfect, 5, "perfect");
     // Coordinates are printed to 0.01 µm.
     assert!(d.base.rms < 2e-5, "residual RMS {} mm", d.base.rms);
 
-    let truth = write_spec(&Spec::new(Kind::Points, &[]), 6, &dir.join("clean")).unwrap();
-    let p = load(&truth.manifest).unwrap();
-    let d = diagnose(
-        &p.observations,
-        p.base,
-        &p.candidates,
-        &DiagnoseParams::default(),
-    )
-    .unwrap();
+    let d = diagnosed(&Spec::new(Kind::Points, &[]), 6, "clean");
     let _ = std::fs::remove_dir_all(&dir);
     assert!(
         d.findings.is_empty(),

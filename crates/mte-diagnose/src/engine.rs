@@ -1361,80 +1361,20 @@ fn hyper_of(family: &Family, rotary: bool) -> Option<(f64, Quantity)> {
     }
 }
 
-/// Refines the periods and time constants of the chosen terms by Gauss–Newton steps on the
-/// searcher's observations (each step regresses the residuals on the model and on every
-/// hyper-parameter's derivative column); a step is kept while it lowers the weighted RSS.
-fn gauss_newton_hyper(searcher: &Searcher<'_>, chosen: &mut [Chosen], w: &DVec) {
-    let n = searcher.obs.len();
-    for _ in 0..3 {
-        let terms = searcher.with(chosen, None);
-        let x = design(&terms.iter().collect::<Vec<_>>(), n);
-        let sol = solve(&x, &searcher.obs.values, w);
-        let mut col = x.ncols() - chosen.iter().map(|c| c.term.width()).sum::<usize>();
-        let mut extra: Vec<(usize, f64, DVec)> = Vec::new(); // (chosen, value, derivative)
-        for (k, c) in chosen.iter().enumerate() {
-            let width = c.term.width();
-            if let Some((h, _)) = hyper_of(&c.term.family, false) {
-                let step = 1e-4 * h.abs().max(1e-12);
-                let cand = searcher.chosen_candidate(c);
-                if let (Some(plus), Some(minus)) =
-                    (cand.at(c.variant, h + step), cand.at(c.variant, h - step))
-                {
-                    let coef = sol.coef.rows(col, width);
-                    extra.push((k, h, (plus.columns - minus.columns) * coef / (2.0 * step)));
-                }
-            }
-            col += width;
-        }
-        if extra.is_empty() {
-            return;
-        }
-        let mut aug = DMat::zeros(n, x.ncols() + extra.len());
-        aug.columns_mut(0, x.ncols()).copy_from(&x);
-        for (e, (_, _, d)) in extra.iter().enumerate() {
-            aug.column_mut(x.ncols() + e).copy_from(d);
-        }
-        let steps = solve(&aug, &sol.residuals, w).coef;
-        drop(aug);
-        let mut moved = chosen.to_vec();
-        for (e, (k, h, _)) in extra.iter().enumerate() {
-            let delta = steps[x.ncols() + e];
-            let c = &mut moved[*k];
-            if let Some(t) = searcher.chosen_candidate(c).at(c.variant, h + delta) {
-                c.term = nth_component(t, c.component);
-            }
-        }
-        let terms = searcher.with(&moved, None);
-        let rss = solve(
-            &design(&terms.iter().collect::<Vec<_>>(), n),
-            &searcher.obs.values,
-            w,
-        )
-        .rss_w;
-        if rss.is_nan() || rss >= sol.rss_w {
-            return;
-        }
-        chosen.clone_from_slice(&moved);
-    }
-}
-
-/// Cofactor of the coefficients of the final model, widened by the uncertainty of the chosen
-/// terms' periods and time constants: the design is augmented by each hyper-parameter's
-/// derivative column (Gauss–Newton at the optimum), whose block of the inverse normal matrix
-/// then carries its variance. Returns the coefficients' cofactor and each chosen term's
-/// hyper-parameter cofactor standard deviation (`None` without one, or where the candidate
-/// cannot re-evaluate it; rotary harmonics are exact and have none).
-fn covariance_with_hyper(
+/// The residuals of the model with design `x` (solution `sol`) regressed on that design
+/// augmented by the derivative column of every chosen term's period or time constant: the
+/// augmented solution, and for each added column the chosen term and its hyper-parameter.
+/// `None` when no chosen term has one the candidate can re-evaluate.
+fn hyper_augmented(
     searcher: &Searcher<'_>,
     chosen: &[Chosen],
     x: &DMat,
     sol: &Solution,
     w: &DVec,
-) -> (DMat, Vec<Option<f64>>) {
+) -> Option<(Solution, Vec<(usize, f64)>)> {
     let p = x.ncols();
-    let offset = p - chosen.iter().map(|c| c.term.width()).sum::<usize>();
-    let mut extra: Vec<(usize, DVec)> = Vec::new();
-    let mut col = offset;
+    let mut col = p - chosen.iter().map(|c| c.term.width()).sum::<usize>();
+    let mut extra: Vec<(usize, f64, DVec)> = Vec::new(); // (chosen, value, derivative)
     for (k, c) in chosen.iter().enumerate() {
         let width = c.term.width();
         if let Some((h, _)) = hyper_of(&c.term.family, false) {
@@ -1444,22 +1384,75 @@ fn covariance_with_hyper(
                 (cand.at(c.variant, h + step), cand.at(c.variant, h - step))
             {
                 let coef = sol.coef.rows(col, width);
-                let d = (plus.columns - minus.columns) * coef / (2.0 * step);
-                extra.push((k, d));
+                extra.push((k, h, (plus.columns - minus.columns) * coef / (2.0 * step)));
             }
         }
         col += width;
     }
-    let mut hyper = vec![None; chosen.len()];
     if extra.is_empty() {
-        return (sol.cofactor.clone(), hyper);
+        return None;
     }
     let mut aug = DMat::zeros(x.nrows(), p + extra.len());
     aug.columns_mut(0, p).copy_from(x);
-    for (e, (_, d)) in extra.iter().enumerate() {
+    for (e, (_, _, d)) in extra.iter().enumerate() {
         aug.column_mut(p + e).copy_from(d);
     }
     let aug_sol = solve(&aug, &sol.residuals, w);
+    Some((aug_sol, extra.into_iter().map(|(k, h, _)| (k, h)).collect()))
+}
+
+/// Refines the periods and time constants of the chosen terms by Gauss–Newton steps on the
+/// searcher's observations (the coefficients of the derivative columns in
+/// [`hyper_augmented`] are the steps); a step is kept while it lowers the weighted RSS.
+fn gauss_newton_hyper(searcher: &Searcher<'_>, chosen: &mut [Chosen], w: &DVec) {
+    let n = searcher.obs.len();
+    let rss_of = |chosen: &[Chosen]| {
+        let terms = searcher.with(chosen, None);
+        let x = design(&terms.iter().collect::<Vec<_>>(), n);
+        let sol = solve(&x, &searcher.obs.values, w);
+        (x, sol)
+    };
+    for _ in 0..3 {
+        let (x, sol) = rss_of(chosen);
+        let Some((steps, hyper)) = hyper_augmented(searcher, chosen, &x, &sol, w) else {
+            return;
+        };
+        let mut moved = chosen.to_vec();
+        for (e, (k, h)) in hyper.iter().enumerate() {
+            let c = &mut moved[*k];
+            if let Some(t) = searcher
+                .chosen_candidate(c)
+                .at(c.variant, h + steps.coef[x.ncols() + e])
+            {
+                c.term = nth_component(t, c.component);
+            }
+        }
+        let rss = rss_of(&moved).1.rss_w;
+        if rss.is_nan() || rss >= sol.rss_w {
+            return;
+        }
+        chosen.clone_from_slice(&moved);
+    }
+}
+
+/// Cofactor of the coefficients of the final model, widened by the uncertainty of the chosen
+/// terms' periods and time constants: the design is augmented by each hyper-parameter's
+/// derivative column (Gauss–Newton at the optimum, [`hyper_augmented`]), whose block of the
+/// inverse normal matrix then carries its variance. Returns the coefficients' cofactor and each
+/// chosen term's hyper-parameter cofactor standard deviation (`None` without one, or where the
+/// candidate cannot re-evaluate it; rotary harmonics are exact and have none).
+fn covariance_with_hyper(
+    searcher: &Searcher<'_>,
+    chosen: &[Chosen],
+    x: &DMat,
+    sol: &Solution,
+    w: &DVec,
+) -> (DMat, Vec<Option<f64>>) {
+    let p = x.ncols();
+    let mut hyper = vec![None; chosen.len()];
+    let Some((aug_sol, extra)) = hyper_augmented(searcher, chosen, x, sol, w) else {
+        return (sol.cofactor.clone(), hyper);
+    };
     for (e, (k, _)) in extra.iter().enumerate() {
         let v = aug_sol.cofactor[(p + e, p + e)];
         if v > 0.0 {

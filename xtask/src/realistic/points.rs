@@ -70,38 +70,12 @@ pub fn write_points(
     // Target in the bed frame: X with its scale error, Y and Z exact, then the target offset.
     let target = |x: f64, y: f64, z: f64| V3::new(x * (1.0 + x_scale), y, z) + target_mm;
     let noise = Normal::new(0.0, noise_um * 1e-3).unwrap_or_else(|_| unreachable!());
-    let mut csv = String::from("setup,x_mm,y_mm,z_mm,c_deg,point_x_mm,point_y_mm,point_z_mm\n");
-    let mut rows = 0;
-    for setup in ["S1", "S2"] {
-        // The instrument on the table, in a pose nobody measured.
-        let pose = trans(V3::new(
-            rng.random_range(-300.0..300.0),
-            rng.random_range(-300.0..300.0),
-            rng.random_range(-100.0..100.0),
-        )) * rot(V3::new(
-            rng.random_range(-1.0..1.0),
-            rng.random_range(-1.0..1.0),
-            rng.random_range(-3.0..3.0),
-        ));
-        for k in 0..12 {
-            let c = 30.0 * k as f64 + rng.random_range(-5.0..5.0);
-            for x in [-150.0, 0.0, 150.0] {
-                for y in [-120.0, 120.0] {
-                    for z in [-150.0, 0.0] {
-                        let p = target(x, y, z);
-                        let in_table = table(c).inverse_transform_point(&p.into());
-                        let m = pose.inverse_transform_point(&in_table);
-                        let v = m.coords + V3::from_fn(|_, _| noise.sample(&mut rng));
-                        csv.push_str(&format!(
-                            "{setup},{x:.3},{y:.3},{z:.3},{c:.4},{:.5},{:.5},{:.5}\n",
-                            v.x, v.y, v.z
-                        ));
-                        rows += 1;
-                    }
-                }
-            }
-        }
-    }
+    let grid = [&[-150.0, 0.0, 150.0][..], &[-120.0, 120.0], &[-150.0, 0.0]];
+    let (csv, rows) = programme(&mut rng, grid, false, Some(&noise), &|x, y, z, c| {
+        table(c)
+            .inverse_transform_point(&target(x, y, z).into())
+            .coords
+    });
     std::fs::write(dir.join("points.csv"), csv)?;
     std::fs::write(
         dir.join("machine.json"),
@@ -132,6 +106,57 @@ pub fn write_points(
         noise_um,
         rows,
     })
+}
+
+/// The measurement programme: two set-ups, each with the instrument on the table in a pose
+/// nobody measured; in each, 12 angles of C (30° apart, jittered by ±5°, rounded to the 4
+/// decimals the file prints when `round_c`), and at each angle every (x, y, z) of `grid`: the
+/// target in the table frame (`in_table(x, y, z, c_deg)`) seen from the instrument, with
+/// `noise` on each coordinate. Returns the CSV text and its number of rows.
+fn programme(
+    rng: &mut ChaCha8Rng,
+    grid: [&[f64]; 3],
+    round_c: bool,
+    noise: Option<&Normal<f64>>,
+    in_table: &dyn Fn(f64, f64, f64, f64) -> V3,
+) -> (String, usize) {
+    let mut csv = String::from("setup,x_mm,y_mm,z_mm,c_deg,point_x_mm,point_y_mm,point_z_mm\n");
+    let mut rows = 0;
+    for setup in ["S1", "S2"] {
+        let pose = trans(V3::new(
+            rng.random_range(-300.0..300.0),
+            rng.random_range(-300.0..300.0),
+            rng.random_range(-100.0..100.0),
+        )) * rot(V3::new(
+            rng.random_range(-1.0..1.0),
+            rng.random_range(-1.0..1.0),
+            rng.random_range(-3.0..3.0),
+        ));
+        for k in 0..12 {
+            let mut c = 30.0 * k as f64 + rng.random_range(-5.0..5.0);
+            if round_c {
+                c = (c * 1e4).round() / 1e4;
+            }
+            for &x in grid[0] {
+                for &y in grid[1] {
+                    for &z in grid[2] {
+                        let mut v = pose
+                            .inverse_transform_point(&in_table(x, y, z, c).into())
+                            .coords;
+                        if let Some(noise) = noise {
+                            v += V3::from_fn(|_, _| noise.sample(rng));
+                        }
+                        csv.push_str(&format!(
+                            "{setup},{x:.3},{y:.3},{z:.3},{c:.4},{:.5},{:.5},{:.5}\n",
+                            v.x, v.y, v.z
+                        ));
+                        rows += 1;
+                    }
+                }
+            }
+        }
+    }
+    (csv, rows)
 }
 
 /// The `mte-machine/1` description: C table on the bed; Y, X, Z on the tool side.
@@ -224,40 +249,22 @@ pub(crate) fn write(
         trans(V3::new(dx, dy, 0.0)) * rot(V3::new(a, b, 0.0)) * rot_z(-c) * trans(d) * rot(e)
     };
     let noise = Normal::new(0.0, (noise_um * 1e-3).max(1e-300)).expect("finite σ");
-    let mut csv = String::from("setup,x_mm,y_mm,z_mm,c_deg,point_x_mm,point_y_mm,point_z_mm\n");
-    let mut rows = 0;
-    for setup in ["S1", "S2"] {
-        let pose = trans(V3::new(
-            rng.random_range(-300.0..300.0),
-            rng.random_range(-300.0..300.0),
-            rng.random_range(-100.0..100.0),
-        )) * rot(V3::new(
-            rng.random_range(-1.0..1.0),
-            rng.random_range(-1.0..1.0),
-            rng.random_range(-3.0..3.0),
-        ));
-        for k in 0..12 {
-            // Rounded as printed: the readings are computed at the angle the file states.
-            let c = ((30.0 * k as f64 + rng.random_range(-5.0..5.0)) * 1e4).round() / 1e4;
-            for x in [-250.0, -120.0, 0.0, 130.0, 250.0] {
-                for y in [-240.0, -80.0, 90.0, 250.0] {
-                    for z in [-260.0, -110.0, 60.0] {
-                        let p = tool(x, y, z).transform_point(&target_mm.into());
-                        let m = pose.inverse_transform_point(&table(c).inverse_transform_point(&p));
-                        let mut v = m.coords;
-                        if noise_um > 0.0 {
-                            v += V3::from_fn(|_, _| noise.sample(rng));
-                        }
-                        csv.push_str(&format!(
-                            "{setup},{x:.3},{y:.3},{z:.3},{c:.4},{:.5},{:.5},{:.5}\n",
-                            v.x, v.y, v.z
-                        ));
-                        rows += 1;
-                    }
-                }
-            }
-        }
-    }
+    let grid = [
+        &[-250.0, -120.0, 0.0, 130.0, 250.0][..],
+        &[-240.0, -80.0, 90.0, 250.0],
+        &[-260.0, -110.0, 60.0],
+    ];
+    // Angles rounded as printed: the readings are computed at the angle the file states.
+    let (csv, rows) = programme(
+        rng,
+        grid,
+        true,
+        (noise_um > 0.0).then_some(&noise),
+        &|x, y, z, c| {
+            let p = tool(x, y, z).transform_point(&target_mm.into());
+            table(c).inverse_transform_point(&p).coords
+        },
+    );
     std::fs::write(dir.join("points.csv"), csv)?;
     std::fs::write(
         dir.join("machine.json"),
