@@ -106,6 +106,8 @@ fn residual_svg(d: &Diagnosis, index: usize) -> String {
     let channels: Vec<usize> = (0..d.channels.len())
         .filter(|c| s.channel.contains(c))
         .collect();
+    // A long record: small dots, or the markers would hide the residuals.
+    let dense = xs.len() > 2_000;
     let mut svg = String::new();
     {
         let height = 120 + 300 * channels.len() as u32;
@@ -113,8 +115,9 @@ fn residual_svg(d: &Diagnosis, index: usize) -> String {
         let _ = root.fill(&WHITE);
         let title = match &s.finding {
             Some(name) => format!(
-                "{name}: residuals without it against {} (grey), fitted effect (red crosses)",
-                s.variable
+                "{name}: residuals without it against {} (grey), fitted effect (red {})",
+                s.variable,
+                if dense { "dots" } else { "crosses" }
             ),
             None => format!(
                 "unexplained structure: final residuals against {}",
@@ -145,14 +148,22 @@ fn residual_svg(d: &Diagnosis, index: usize) -> String {
                     .map(|i| (xs[i], values[i]))
                     .collect()
             };
-            let residual_style = RGBColor(120, 140, 170).mix(0.5).filled();
+            let residual_style = RGBColor(120, 140, 170)
+                .mix(if dense { 0.3 } else { 0.5 })
+                .filled();
             let effect_style = RGBColor(210, 30, 20).stroke_width(2);
             let _ = chart.draw_series(
                 points(&residual)
                     .into_iter()
-                    .map(|p| Circle::new(p, 2, residual_style)),
+                    .map(|p| Circle::new(p, if dense { 1 } else { 2 }, residual_style)),
             );
-            if s.finding.is_some() {
+            if s.finding.is_some() && dense {
+                let _ = chart.draw_series(
+                    points(&effect)
+                        .into_iter()
+                        .map(|p| Circle::new(p, 1, RGBColor(210, 30, 20).filled())),
+                );
+            } else if s.finding.is_some() {
                 let _ = chart.draw_series(
                     points(&effect)
                         .into_iter()
