@@ -478,7 +478,7 @@ pub fn diagnose(
             .and_then(|v| obs.variable(v))
             .is_some_and(|v| v.kind == crate::VariableKind::RotaryAxis)
     };
-    let findings: Vec<Finding> = chosen
+    let mut findings: Vec<Finding> = chosen
         .iter()
         .enumerate()
         .map(|(k, c)| Finding {
@@ -512,6 +512,81 @@ pub fn diagnose(
             exposed_by: c.term.exposed_by.clone(),
         })
         .collect();
+    // A period the positions cannot pin down: other periods that fit about as well widen the
+    // amplitude's uncertainty and are named. (A long record samples densely: not needed there.)
+    let mut ambiguity_notes = Vec::new();
+    if thinned.is_none() {
+        let mut col = base.iter().map(Term::width).sum::<usize>();
+        for (k, c) in chosen.iter().enumerate() {
+            let width = c.term.width();
+            let modes = period_modes(
+                obs,
+                &w,
+                &x,
+                &sol,
+                col,
+                &c.term,
+                searcher.chosen_candidate(c),
+            );
+            col += width;
+            let Some(h) = findings[k]
+                .hyper_parameter
+                .clone()
+                .filter(|_| !modes.is_empty())
+            else {
+                continue;
+            };
+            let f = &mut findings[k];
+            if let Some(amp) = f.estimates.iter_mut().find(|e| e.name == "amplitude") {
+                let weights: Vec<f64> = modes.iter().map(|m| (-0.5 * m.delta_chi2).exp()).collect();
+                let spread = modes
+                    .iter()
+                    .zip(&weights)
+                    .map(|(m, w)| w * (m.amplitude - amp.value).powi(2))
+                    .sum::<f64>()
+                    / (1.0 + weights.iter().sum::<f64>());
+                amp.uncertainty = (amp.uncertainty.powi(2) + spread).sqrt();
+                amp.text = amp.quantity.format(amp.value, amp.uncertainty);
+            }
+            let others: Vec<String> = modes
+                .iter()
+                .map(|m| {
+                    format!(
+                        "{} (Δχ² = {:.1}, amplitude {})",
+                        h.quantity
+                            .format(m.period, 0.0)
+                            .split(" ±")
+                            .next()
+                            .unwrap_or_default(),
+                        m.delta_chi2,
+                        Quantity::Length
+                            .format(m.amplitude, 0.0)
+                            .split(" ±")
+                            .next()
+                            .unwrap_or_default()
+                    )
+                })
+                .collect();
+            f.alternatives.extend(modes.iter().map(|m| {
+                format!(
+                    "{} at a period of {}",
+                    f.name,
+                    h.quantity
+                        .format(m.period, 0.0)
+                        .split(" ±")
+                        .next()
+                        .unwrap_or_default()
+                )
+            }));
+            ambiguity_notes.push(format!(
+                "the period of {} is ambiguous with these positions: {} fit{} about as well as {} (Δχ² < {MODE_CHI2}); its amplitude's uncertainty includes their spread; positions at a finer or different spacing would tell them apart",
+                f.name,
+                others.join(", "),
+                if others.len() == 1 { "s" } else { "" },
+                h.text,
+            ));
+        }
+    }
     let remaining_structure: Vec<StructureTest> = structure_tests(
         obs,
         &x,
@@ -574,6 +649,7 @@ pub fn diagnose(
         .chain(compound_drifts(&findings))
         .collect();
     notes.extend(compound.iter().map(|c| c.note.clone()));
+    notes.extend(ambiguity_notes);
     let residual_series = residual_series(
         obs,
         &findings,
@@ -1399,6 +1475,114 @@ fn hyper_augmented(
     }
     let aug_sol = solve(&aug, &sol.residuals, w);
     Some((aug_sol, extra.into_iter().map(|(k, h, _)| (k, h)).collect()))
+}
+
+/// Δχ² below which another period explains the residual about as well as the chosen one.
+const MODE_CHI2: f64 = 10.0;
+
+/// Another period of a periodic finding that fits about as well (an alias of the positions).
+struct PeriodMode {
+    period: f64,
+    /// Weighted RSS above the chosen period's, in units of σ0².
+    delta_chi2: f64,
+    /// Amplitude at that period, mm (or rad).
+    amplitude: f64,
+}
+
+/// The local optima of the profile of the periodic term `term` (columns `col..` of the final
+/// design `x`, solution `sol`) over its candidate's grid, away from the chosen period by more
+/// than the Fourier resolution, whose fit is within [`MODE_CHI2`] of the chosen one's; best
+/// first, at most three.
+fn period_modes(
+    obs: &Observations,
+    w: &DVec,
+    x: &DMat,
+    sol: &Solution,
+    col: usize,
+    term: &Term,
+    candidate: &dyn Candidate,
+) -> Vec<PeriodMode> {
+    let Family::Periodic { period: p0 } = term.family else {
+        return Vec::new();
+    };
+    let Some(span) = term
+        .exposed_by
+        .as_deref()
+        .and_then(|v| obs.variable(v))
+        .map(|v| {
+            let (lo, hi) = crate::basis::range(&v.values);
+            hi - lo
+        })
+    else {
+        return Vec::new();
+    };
+    let (n, p) = x.shape();
+    let width = term.width();
+    let rest = DMat::from_fn(n, p - width, |i, j| {
+        x[(i, if j < col { j } else { j + width })]
+    });
+    let without = solve(&rest, &obs.values, w);
+    let projector = Projector::new(&rest, w, &without.residuals);
+    let delta0 = projector.increment(&term.columns).delta_rss;
+    let s2 = (sol.rss_w / sol.dof().max(1) as f64).max(1e-300);
+    let profile: Vec<(f64, f64, Term)> = candidate
+        .variants(obs)
+        .into_iter()
+        .filter_map(|t| match t.family {
+            Family::Periodic { period } => {
+                Some((period, projector.increment(&t.columns).delta_rss, t))
+            }
+            _ => None,
+        })
+        .collect();
+    // Local optima on the grid, away from the chosen period, the best few refined between their
+    // grid neighbours (a grid point can sit half a step off its optimum).
+    let mut optima: Vec<usize> = (0..profile.len())
+        .filter(|&i| {
+            let d = profile[i].1;
+            (i == 0 || d >= profile[i - 1].1)
+                && (i + 1 == profile.len() || d >= profile[i + 1].1)
+                && (1.0 / profile[i].0 - 1.0 / p0).abs() > 1.0 / span
+        })
+        .collect();
+    optima.sort_by(|&a, &b| profile[b].1.total_cmp(&profile[a].1));
+    optima.truncate(6);
+    let score = |t: &Term| without.rss_w - projector.increment(&t.columns).delta_rss;
+    let refined: Vec<(f64, f64, Term)> = optima
+        .into_iter()
+        .map(|i| {
+            let (q, d, t) = &profile[i];
+            match candidate.refine(i, &score) {
+                Some(r) => match r.family {
+                    Family::Periodic { period } => {
+                        let d = projector.increment(&r.columns).delta_rss;
+                        (period, d, r)
+                    }
+                    _ => (*q, *d, t.clone()),
+                },
+                None => (*q, *d, t.clone()),
+            }
+        })
+        .collect();
+    let mut modes: Vec<(f64, f64, &Term)> = refined
+        .iter()
+        .map(|(q, d, t)| (*q, (delta0 - d) / s2, t))
+        .filter(|(q, chi2, _)| (1.0 / q - 1.0 / p0).abs() > 1.0 / span && *chi2 < MODE_CHI2)
+        .collect();
+    modes.sort_by(|a, b| a.1.total_cmp(&b.1));
+    modes.truncate(3);
+    modes
+        .into_iter()
+        .map(|(period, delta_chi2, t)| {
+            let fit = solve(&hcat(&rest, &t.columns), &obs.values, w);
+            let k = fit.coef.len();
+            PeriodMode {
+                period,
+                delta_chi2: delta_chi2.max(0.0),
+                amplitude: fit.coef[k - 2].hypot(fit.coef[k - 1]),
+            }
+        })
+        .collect()
 }
 
 /// Refines the periods and time constants of the chosen terms by Gauss–Newton steps on the

@@ -409,3 +409,52 @@ fn bad_axis_files_give_errors_naming_the_line() {
         .to_string();
     assert!(err.contains("line 2") && err.contains("direction"), "{err}");
 }
+
+/// Eleven irregular targets over 600 mm cannot pin down a 23 mm pitch: periods that fit them
+/// about as well are named, and the amplitude's uncertainty is widened so that it covers the
+/// truth, whichever of them the search chose.
+#[test]
+fn an_ambiguous_period_is_said_to_be_ambiguous_and_its_amplitude_covers_the_truth() {
+    let targets = [
+        0.0, 47.0, 121.0, 166.0, 228.0, 301.0, 349.0, 417.0, 468.0, 533.0, 600.0,
+    ];
+    let hidden = Hidden {
+        pitch_amplitude_um: 2.0,
+        pitch_period_mm: 23.0,
+        ..Hidden::default()
+    };
+    let mut ambiguous = 0;
+    for seed in 1..=4 {
+        let d = run(&write_dataset_at("ambiguous", &targets, hidden, seed));
+        let Some(f) = d.finding("EXX periodic") else {
+            continue;
+        };
+        let amp = f.estimates.iter().find(|e| e.name == "amplitude").unwrap();
+        let period = f.hyper_parameter.as_ref().unwrap().value;
+        let noted = d
+            .notes
+            .iter()
+            .any(|n| n.contains("is ambiguous with these positions"));
+        ambiguous += usize::from(noted);
+        if (period - 23.0).abs() > 0.5 {
+            // An alias was chosen: the report must say the period is ambiguous.
+            assert!(
+                noted,
+                "period {period} mm chosen without a word: {:?}",
+                d.notes
+            );
+        }
+        if noted {
+            assert!(f.alternatives.iter().any(|a| a.contains("at a period of")));
+            assert!(
+                within(amp.value * 1e3, amp.uncertainty * 1e3, 2.0, 2.0),
+                "{}",
+                amp.text
+            );
+        }
+    }
+    assert!(
+        ambiguous > 0,
+        "eleven targets over 600 mm leave a 23 mm period ambiguous"
+    );
+}
