@@ -516,25 +516,24 @@ pub struct PowerCell {
     pub names: Vec<(String, usize)>,
 }
 
-/// The user's model of a power cell: what the field uses for the instrument, less the hidden
-/// effect where that model has it. Axis and tracker data: the standard model (every ordinary
-/// error), less a squareness for a squareness cell. R-test data: what IBS, KinematicsOpt and
-/// CYCLE996 identify, the location errors of the rotary axes (`{"location": true}`), less `EA0B`
-/// for a B-tilt cell — the standard model's component errors of the rotary axes would hold an
-/// angular positioning error or a tilt already (as harmonics of the error motions), so a power
-/// cell with them would measure nothing. What the user's model lacks is what a diagnosis can find.
-pub fn user_model_lacking(kind: Kind, effect: Effect) -> BaseModel {
-    match (kind, effect) {
-        (Kind::Rtest, Effect::BTilt) => BaseModel::Given(serde_json::json!({
-            "terms": ["EX0B", "EZ0B", "EC0B", "EX0C", "EY0C", "EA0C", "EB0C"]
-        })),
-        (Kind::Rtest, _) => BaseModel::Given(serde_json::json!({ "location": true })),
-        (_, Effect::Squareness) => BaseModel::Given(serde_json::json!({
-            "components": {"degree": 3},
-            "location": true
-        })),
-        _ => BaseModel::Default,
-    }
+/// The user's model of a power cell: the standard model (every ordinary error,
+/// [`BaseModel::standard`]) less the errors that would already hold the hidden effect
+/// (`except`), with the errors an R-test cannot tell from them: for a squareness cell the XY
+/// squareness (`EC0Y`, `EC0X`) and the orientation of the B line about Z (`EC0B`); for an
+/// angular positioning cell the angular positioning error of C (`ECC`); for a B tilt the tilt
+/// (`EA0B`), B's error motion about X (`EAB`, whose harmonics over B's range hold most of a
+/// constant tilt) and the YZ squareness (`EA0Y`, `EA0Z`). A finding then names one of them and
+/// lists the others as not separable. What the user's model lacks is what a diagnosis can find.
+pub fn user_model_lacking(_kind: Kind, effect: Effect) -> BaseModel {
+    let except: &[&str] = match effect {
+        Effect::Squareness => &["EC0Y", "EC0X", "EC0B"],
+        Effect::AngularPositioning => &["ECC"],
+        Effect::BTilt => &["EA0B", "EAB", "EA0Y", "EA0Z"],
+        _ => return BaseModel::Default,
+    };
+    let mut model = BaseModel::standard();
+    model["except"] = serde_json::json!(except);
+    BaseModel::Given(model)
 }
 
 /// [`power_with`] with the user's model lacking the effect ([`user_model_lacking`]).
@@ -788,8 +787,11 @@ too. The truth is computed with the generator's own homogeneous transforms, not 
 mte-kinematics or mte-rtest. Each dataset is diagnosed with `DiagnoseParams::default()`. \
 Base model written in the manifests (the user's model of a real machine, which has every \
 ordinary error): `{{\"components\": {{\"degree\": 3}}, \"squareness\": true, \"location\": true}}` \
-for every kind, unless the command says `--base-model omit`; a power cell whose effect is itself an \
-ordinary error (squareness) leaves it out of that model; R-test power cells use the R-test practice model, the rotary axes' location errors (`{{\"location\": true}}`, less `EA0B` for the B tilt), because the standard model's rotary error motions would already hold a C angular positioning error or a B tilt (`studies::user_model_lacking`).\n",
+for every kind, unless the command says `--base-model omit`; a power cell whose effect the standard \
+model would already hold leaves those errors out (`\"except\"`) with the errors an R-test cannot \
+tell from them: `EC0Y`, `EC0X`, `EC0B` for a squareness cell, C's angular positioning `ECC` for an \
+angular positioning cell, `EA0B`, B's error motion about X `EAB` and `EA0Y`, `EA0Z` for a B tilt \
+(`studies::user_model_lacking`).\n",
         r.command, r.base_seed
     );
     if !r.fdr.is_empty() {

@@ -454,6 +454,10 @@ pub struct BaseModelSpec {
     /// Further terms by their library name (`EC0Y`, `EXX poly3`, `EXX reversal`).
     #[serde(default)]
     pub terms: Vec<String>,
+    /// Ordinary errors the shorthands above leave out, by ISO name (`ECC` for the angular
+    /// positioning error of C, `EC0Y`, `EA0B`): "every component error but C's positioning".
+    #[serde(default)]
+    pub except: Vec<String>,
 }
 
 /// The component errors of a [`BaseModelSpec`].
@@ -503,9 +507,20 @@ impl BaseModelSpec {
         location: &[String],
         candidates: &[Box<dyn Candidate>],
     ) -> std::result::Result<Vec<Term>, String> {
+        let known: Vec<String> = slots.iter().map(|s| s.name.clone()).collect();
+        if let Some(name) = self.except.iter().find(|n| !known.contains(n)) {
+            let close: Vec<String> = mte_linalg::text::closest(name, &known, 5)
+                .into_iter()
+                .map(|n| format!("`{n}`"))
+                .collect();
+            return Err(format!(
+                "`except`: `{name}` is not an error of this machine; closest: {}",
+                close.join(", ")
+            ));
+        }
         let mut out: Vec<Term> = Vec::new();
         for slot in slots {
-            if slot.column.iter().all(|v| v.abs() < 1e-15) {
+            if slot.column.iter().all(|v| v.abs() < 1e-15) || self.except.contains(&slot.name) {
                 continue;
             }
             let constant = |family: Family| Term {
@@ -590,50 +605,109 @@ impl BaseModelSpec {
 }
 
 impl BaseModelSpec {
-    /// The completions of the spec's component errors: for every component error in the base,
-    /// its next polynomial degrees (up to [`MAX_COMPONENT_DEGREE`], [`COMPLETION_BLOCK`] at a
-    /// time) or harmonics (up to [`MAX_COMPONENT_HARMONIC`], one at a time), each block after the
-    /// one before. Real component
-    /// errors are smooth functions, not polynomials of the degree a user happens to state; the
-    /// diagnosis adds these when the data ask for them, before it looks for causes.
+    /// The completions of the spec's component errors, each block after the one before: for
+    /// every component error of a linear axis in the base, its next polynomial degrees (up to
+    /// [`MAX_COMPONENT_DEGREE`], [`COMPLETION_BLOCK`] at a time); for every rotary axis, the
+    /// next harmonic of a turn (up to [`MAX_COMPONENT_HARMONIC`]) of all its error motions at
+    /// once. Real component errors are smooth functions, not polynomials of the degree a user
+    /// happens to state; the diagnosis adds these when the data ask for them, before it looks
+    /// for causes. A rotary axis' error motions are completed together because a harmonic of a
+    /// turn (the form of a bearing race, a wobble) shows in all of them, each by a little, and
+    /// at a point the translations and tilts are partly confounded: one at a time, none would
+    /// be significant while together they are.
     pub fn completions(&self, obs: &Observations, slots: &[SlotEffect]) -> Vec<Box<dyn Candidate>> {
         let mut out: Vec<Box<dyn Candidate>> = Vec::new();
         let Some(degree) = self.components.as_ref().map(|c| c.degree) else {
             return out;
         };
+        // Rotary axes in the order their first slot appears, with their slots and base order.
+        let mut rotary_axes: Vec<(String, usize, Vec<&SlotEffect>)> = Vec::new();
         for slot in slots {
-            if slot.column.iter().all(|v| v.abs() < 1e-15) {
+            if slot.column.iter().all(|v| v.abs() < 1e-15) || self.except.contains(&slot.name) {
                 continue;
             }
             let Some((_, hi, rotary)) = component_orders(obs, slot, degree) else {
                 continue;
             };
-            let top = if rotary {
-                MAX_COMPONENT_HARMONIC
-            } else {
-                MAX_COMPONENT_DEGREE
-            };
+            if rotary {
+                let axis = component_axis(slot).unwrap_or_default();
+                match rotary_axes.iter_mut().find(|(a, _, _)| *a == axis) {
+                    Some((_, _, group)) => group.push(slot),
+                    None => rotary_axes.push((axis, hi, vec![slot])),
+                }
+                continue;
+            }
             // Orders in blocks: a smooth error's remainder spreads over several orders, which
             // one at a time would not reveal.
-            let step = if rotary { 1 } else { COMPLETION_BLOCK };
             let mut after: Option<String> = None;
-            for first in (hi + 1..=top).step_by(step) {
-                let last = (first + step - 1).min(top);
+            for first in (hi + 1..=MAX_COMPONENT_DEGREE).step_by(COMPLETION_BLOCK) {
+                let last = (first + COMPLETION_BLOCK - 1).min(MAX_COMPONENT_DEGREE);
                 let Some(cols) = component_columns(obs, slot, first, last) else {
                     break;
                 };
-                let (name, what) = match (rotary, first == last) {
-                    (true, _) => (
-                        format!("{} H{first}", slot.name),
-                        format!("harmonic {first} of a turn"),
-                    ),
-                    (false, true) => (format!("{} P{first}", slot.name), format!("degree {first}")),
-                    (false, false) => (
+                let (name, what) = if first == last {
+                    (format!("{} P{first}", slot.name), format!("degree {first}"))
+                } else {
+                    (
                         format!("{} P{first}-{last}", slot.name),
                         format!("degrees {first} to {last}"),
-                    ),
+                    )
                 };
                 let term = component_term(slot, name.clone(), &what, cols);
+                out.push(Box::new(Completion {
+                    term,
+                    after: after.replace(name),
+                }));
+            }
+        }
+        for (axis, hi, group) in rotary_axes {
+            let mut after: Option<String> = None;
+            for h in hi + 1..=MAX_COMPONENT_HARMONIC {
+                let parts: Vec<(&SlotEffect, DMat)> = group
+                    .iter()
+                    .filter_map(|s| component_columns(obs, s, h, h).map(|c| (*s, c)))
+                    .collect();
+                if parts.is_empty() {
+                    break;
+                }
+                let name = format!("{axis} H{h}");
+                let columns = DMat::from_fn(
+                    obs.len(),
+                    parts.iter().map(|(_, c)| c.ncols()).sum(),
+                    |i, j| {
+                        let mut j = j;
+                        for (_, c) in &parts {
+                            if j < c.ncols() {
+                                return c[(i, j)];
+                            }
+                            j -= c.ncols();
+                        }
+                        unreachable!("column index within the block")
+                    },
+                );
+                let term = Term {
+                    coefficients: parts
+                        .iter()
+                        .flat_map(|(s, c)| {
+                            (0..c.ncols()).map(|k| (format!("{} H{h}[{k}]", s.name), s.quantity))
+                        })
+                        .collect(),
+                    label: format!("error motions of {axis}, harmonic {h} of a turn"),
+                    meaning: format!(
+                        "a higher harmonic of the error motions of {axis} ({}): the form of a bearing race or a wobble repeats every turn",
+                        parts
+                            .iter()
+                            .map(|(s, _)| s.name.as_str())
+                            .collect::<Vec<_>>()
+                            .join(", ")
+                    ),
+                    name: name.clone(),
+                    family: Family::Base,
+                    columns,
+                    summary: Summary::EachCoefficient,
+                    exposed_by: Some(axis.clone()),
+                    separated_by: None,
+                };
                 out.push(Box::new(Completion {
                     term,
                     after: after.replace(name),

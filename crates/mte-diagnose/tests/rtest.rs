@@ -286,6 +286,62 @@ fn default_base_has_the_orientation_location_errors() {
 }
 
 #[test]
+fn a_base_model_except_an_error_lets_the_search_find_it() {
+    // "My model has the location errors, except the tilt of the B line": the tilt is then a
+    // cause the diagnosis must find, not a base parameter.
+    let alpha = 0.0031_f64.to_radians();
+    let mut errors = pivots();
+    errors.extend(b_tilt_about_x(alpha));
+    let d = run(&write_dataset_with_base(
+        "except",
+        &two_positions(),
+        &errors,
+        1,
+        26,
+        Some(r#"{"location": true, "except": ["EA0B"]}"#),
+    ));
+    let report = mte_diagnose::report::markdown(&d, "except EA0B");
+    assert!(
+        d.base_parameters.iter().all(|p| p.term != "EA0B"),
+        "{report}"
+    );
+    assert!(
+        d.base_parameters.iter().any(|p| p.term == "EA0C"),
+        "{report}"
+    );
+    let tilt = d
+        .findings
+        .iter()
+        .find(|f| f.name.starts_with("EA0B"))
+        .expect(&report);
+    let e = &tilt.estimates[0];
+    assert!((e.value - alpha).abs() <= 2.0 * e.uncertainty, "{}", e.text);
+}
+
+#[test]
+fn a_misspelt_exception_names_the_closest_errors() {
+    let path = write_dataset_with_base(
+        "except-typo",
+        &two_positions(),
+        &pivots(),
+        1,
+        27,
+        Some(r#"{"location": true, "except": ["EAOB"]}"#),
+    );
+    let err = load_with_noise(&path, Some(NOISE_UM))
+        .err()
+        .unwrap()
+        .to_string();
+    assert!(
+        err.contains("manifest.json")
+            && err.contains("except")
+            && err.contains("`EAOB`")
+            && err.contains("`EA0B`"),
+        "{err}"
+    );
+}
+
+#[test]
 fn b_axis_squareness_to_y_is_found_with_two_ball_positions() {
     // Seed 002: the B axis line not square to the Y motion in the Y–Z plane by 0.0031°. The
     // generator tilts the B line and keeps the C axis in place: ISO's absolute representation.
