@@ -1,7 +1,8 @@
 //! The diagnosis on realistic datasets (issue targets: an 8-cycle R-test thermal dataset of
 //! about 5 000 observations in ≤ 3 s, tracker data with a volumetric base and about 2 000
 //! lengths in ≤ 5 s, release, 2 cores). Load and diagnosis, including the 5 outer searches of
-//! the honest held-out figures.
+//! the honest held-out figures. Each is reported beside its baseline from the same run, the
+//! load alone (`*_load`): quote the ratio, the machine is noisy.
 //!
 //! cargo bench -p xtask --bench diagnose
 #![allow(missing_docs)]
@@ -32,6 +33,8 @@ fn bench(c: &mut Criterion) {
         let prepared =
             || mte_diagnose::load_with_noise(&truth.manifest, noise).expect("dataset loads");
         eprintln!("{name}: {} observations", truth.n_observations);
+        // The baseline of the same run: reading and preparing the dataset alone.
+        group.bench_function(format!("{name}_load"), |b| b.iter(|| black_box(prepared())));
         group.bench_function(name, |b| {
             b.iter(|| {
                 let p = prepared();

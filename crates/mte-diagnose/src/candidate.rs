@@ -671,20 +671,13 @@ impl BaseModelSpec {
                     break;
                 }
                 let name = format!("{axis} H{h}");
-                let columns = DMat::from_fn(
-                    obs.len(),
-                    parts.iter().map(|(_, c)| c.ncols()).sum(),
-                    |i, j| {
-                        let mut j = j;
-                        for (_, c) in &parts {
-                            if j < c.ncols() {
-                                return c[(i, j)];
-                            }
-                            j -= c.ncols();
-                        }
-                        unreachable!("column index within the block")
-                    },
-                );
+                let mut columns =
+                    DMat::zeros(obs.len(), parts.iter().map(|(_, c)| c.ncols()).sum());
+                let mut at = 0;
+                for (_, c) in &parts {
+                    columns.columns_mut(at, c.ncols()).copy_from(c);
+                    at += c.ncols();
+                }
                 let term = Term {
                     coefficients: parts
                         .iter()

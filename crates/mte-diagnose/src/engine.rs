@@ -1489,6 +1489,16 @@ struct PeriodMode {
     amplitude: f64,
 }
 
+/// A periodic term's period and the range its exposing variable covers in the data.
+fn period_and_span(obs: &Observations, t: &Term) -> Option<(f64, f64)> {
+    let Family::Periodic { period } = t.family else {
+        return None;
+    };
+    let v = obs.variable(t.exposed_by.as_deref()?)?;
+    let (lo, hi) = crate::basis::range(&v.values);
+    Some((period, hi - lo))
+}
+
 /// The local optima of the profile of the periodic term `term` (columns `col..` of the final
 /// design `x`, solution `sol`) over its candidate's grid, away from the chosen period by more
 /// than the Fourier resolution, whose fit is within [`MODE_CHI2`] of the chosen one's; best
@@ -1502,18 +1512,7 @@ fn period_modes(
     term: &Term,
     candidate: &dyn Candidate,
 ) -> Vec<PeriodMode> {
-    let Family::Periodic { period: p0 } = term.family else {
-        return Vec::new();
-    };
-    let Some(span) = term
-        .exposed_by
-        .as_deref()
-        .and_then(|v| obs.variable(v))
-        .map(|v| {
-            let (lo, hi) = crate::basis::range(&v.values);
-            hi - lo
-        })
-    else {
+    let Some((p0, span)) = period_and_span(obs, term) else {
         return Vec::new();
     };
     let (n, p) = x.shape();
@@ -1692,18 +1691,7 @@ fn near_a_component(
     candidate: usize,
     skip: Option<usize>,
 ) -> bool {
-    let Family::Periodic { period } = t.family else {
-        return false;
-    };
-    let Some(span) = t
-        .exposed_by
-        .as_deref()
-        .and_then(|v| obs.variable(v))
-        .map(|v| {
-            let (lo, hi) = crate::basis::range(&v.values);
-            hi - lo
-        })
-    else {
+    let Some((period, span)) = period_and_span(obs, t) else {
         return false;
     };
     chosen.iter().enumerate().any(|(k, c)| {
