@@ -1334,17 +1334,32 @@ fn f_test(rss: f64, delta_rss: f64, k: usize, dof: usize) -> f64 {
     stats::f_sf(f, k as f64, (dof - k) as f64)
 }
 
-/// Periodic findings of one axis whose periods are the first's divided by 2, 3, …: harmonics of
-/// one periodic error that is not a sine (a sawtooth, a pitch error with a sharp profile), said
-/// in one sentence so the reader does not take them for independent causes.
+/// Highest harmonic order [`harmonic_families`] considers: a higher one is as likely a chance
+/// ratio of two unrelated periods (the ratio's tolerance grows with the order).
+const MAX_HARMONIC_ORDER: f64 = 6.0;
+
+/// Periodic findings of one axis whose periods are the first's divided by 2, 3, … (at most
+/// [`MAX_HARMONIC_ORDER`]) and whose amplitudes are not larger than the first's: harmonics of
+/// one periodic error that is not a sine (a sawtooth, a pitch error with a sharp profile, whose
+/// harmonics fall off — a sawtooth's as 1/k), said in one sentence so the reader does not take
+/// them for independent causes. A component stronger than the wave it would belong to is not
+/// its harmonic.
 fn harmonic_families(findings: &[Finding]) -> Vec<Compound> {
-    let periodic: Vec<(&Finding, f64, f64)> = findings
+    let amplitude = |f: &Finding| {
+        f.estimates
+            .iter()
+            .find(|e| e.name == "amplitude")
+            .map(|e| (e.value.abs(), e.uncertainty))
+    };
+    let mut periodic: Vec<(&Finding, f64, f64)> = findings
         .iter()
         .filter_map(|f| {
             let h = f.hyper_parameter.as_ref()?;
             matches!(f.family, Family::Periodic { .. }).then_some((f, h.value, h.uncertainty))
         })
         .collect();
+    // Longest period first: the search may find a harmonic before its fundamental.
+    periodic.sort_by(|a, b| b.1.total_cmp(&a.1));
     let mut notes = Vec::new();
     let mut used = vec![false; periodic.len()];
     for (i, &(f, p, u)) in periodic.iter().enumerate() {
@@ -1353,14 +1368,21 @@ fn harmonic_families(findings: &[Finding]) -> Vec<Compound> {
         }
         let mut members = vec![(1, f)];
         for (j, &(g, q, v)) in periodic.iter().enumerate().skip(i + 1) {
-            if used[j] || g.exposed_by != f.exposed_by || q >= p {
+            if used[j] || g.exposed_by != f.exposed_by {
                 continue;
             }
             let ratio = p / q;
             let k = ratio.round();
             // The ratio's uncertainty from both periods', and never tighter than 1 %.
             let u_ratio = (ratio * ((u / p).powi(2) + (v / q).powi(2)).sqrt()).max(0.01 * ratio);
-            if k >= 2.0 && (ratio - k).abs() <= 2.0 * u_ratio {
+            let weaker = match (amplitude(f), amplitude(g)) {
+                (Some((a, ua)), Some((b, ub))) => b <= a + 2.0 * ua.hypot(ub),
+                _ => false,
+            };
+            if (2.0..=MAX_HARMONIC_ORDER).contains(&k)
+                && (ratio - k).abs() <= 2.0 * u_ratio
+                && weaker
+            {
                 members.push((k as usize, g));
                 used[j] = true;
             }
@@ -2025,5 +2047,88 @@ impl ResidualSeries {
         keep(&mut self.residual);
         keep(&mut self.effect);
         self.channel = self.channel.iter().copied().step_by(step).collect();
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn estimate(name: &str, value: f64, uncertainty: f64, quantity: Quantity) -> Estimate {
+        Estimate {
+            name: name.into(),
+            value,
+            uncertainty,
+            quantity,
+            text: String::new(),
+        }
+    }
+
+    /// A periodic finding of X with `period` mm and `amplitude` µm (u 1 % of each).
+    fn periodic(name: &str, period: f64, amplitude_um: f64) -> Finding {
+        Finding {
+            name: name.into(),
+            label: String::new(),
+            meaning: String::new(),
+            family: Family::Periodic { period },
+            estimates: vec![estimate(
+                "amplitude",
+                amplitude_um * 1e-3,
+                amplitude_um * 1e-5,
+                Quantity::Length,
+            )],
+            hyper_parameter: Some(estimate(
+                "period",
+                period,
+                period * 1e-3,
+                Quantity::Distance,
+            )),
+            p_value: 0.0,
+            p_value_final: 0.0,
+            cv_rms_before: 1.0,
+            cv_rms_after: 0.5,
+            alternatives: Vec::new(),
+            separated_by: None,
+            exposed_by: Some("X".into()),
+        }
+    }
+
+    #[test]
+    fn a_harmonic_found_before_its_fundamental_is_one_family() {
+        // a sawtooth: harmonic k has amplitude A / k; the search found the second first
+        let f = [
+            periodic("EXX periodic", 15.0, 1.0),
+            periodic("EXX periodic #2", 30.0, 2.0),
+            periodic("EXX periodic #3", 10.0, 0.67),
+        ];
+        let c = harmonic_families(&f);
+        assert_eq!(c.len(), 1);
+        assert_eq!(
+            c[0].findings,
+            ["EXX periodic #2", "EXX periodic", "EXX periodic #3"]
+        );
+        assert!(c[0].note.contains("30.000 ± 0.030 mm"), "{}", c[0].note);
+    }
+
+    #[test]
+    fn a_stronger_or_high_order_component_is_not_a_harmonic() {
+        // a strong pitch error at 30 mm beside a weak long wave of 60 mm: not one sawtooth
+        let stronger = [
+            periodic("EXX periodic", 30.0, 2.0),
+            periodic("EXX periodic #2", 60.0, 0.4),
+        ];
+        assert!(harmonic_families(&stronger).is_empty());
+        // a ratio of 9 is as likely chance as a harmonic
+        let high = [
+            periodic("EXX periodic", 270.0, 2.0),
+            periodic("EXX periodic #2", 30.0, 0.4),
+        ];
+        assert!(harmonic_families(&high).is_empty());
+        // the same pair at a ratio of 3 is one
+        let third = [
+            periodic("EXX periodic", 90.0, 2.0),
+            periodic("EXX periodic #2", 30.0, 0.4),
+        ];
+        assert_eq!(harmonic_families(&third).len(), 1);
     }
 }
