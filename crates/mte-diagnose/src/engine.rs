@@ -3,6 +3,7 @@
 //! every cause in the complete model, and measure the gain of the whole search on data it did
 //! not see.
 
+use std::borrow::Cow;
 use std::collections::HashMap;
 
 use mte_linalg::{DMat, DVec, stats};
@@ -958,16 +959,21 @@ impl Searcher<'_> {
             let mut scored: Vec<Scored> = Vec::new();
             for &ci in &eligible {
                 let mut best: Option<(usize, Increment)> = None;
-                for vi in 0..self.pool.variants[ci].len() {
-                    let t = overrides
-                        .get(&(ci, vi))
-                        .unwrap_or(&self.pool.variants[ci][vi]);
-                    if times_chosen[ci] > 0
-                        && near_a_component(obs, t, &chosen, self.pool.source[ci], None)
-                    {
-                        continue;
-                    }
-                    let inc = projector.increment(&t.columns);
+                let tried: Vec<(usize, &Term)> = (0..self.pool.variants[ci].len())
+                    .map(|vi| {
+                        let t = overrides
+                            .get(&(ci, vi))
+                            .unwrap_or(&self.pool.variants[ci][vi]);
+                        (vi, t)
+                    })
+                    .filter(|(_, t)| {
+                        times_chosen[ci] == 0
+                            || !near_a_component(obs, t, &chosen, self.pool.source[ci], None)
+                    })
+                    .collect();
+                let increments =
+                    projector.increments(tried.len(), |i| Cow::Borrowed(&tried[i].1.columns));
+                for (&(vi, t), inc) in tried.iter().zip(increments) {
                     if inc.separability < SEPARABILITY_TOLERANCE || inc.new_rank < t.width() {
                         continue;
                     }
@@ -1546,15 +1552,19 @@ fn period_modes(
     let projector = Projector::new(&rest, w, &without.residuals);
     let delta0 = projector.increment(&term.columns).delta_rss;
     let s2 = (sol.rss_w / sol.dof().max(1) as f64).max(1e-300);
-    let profile: Vec<(f64, f64, Term)> = candidate
+    let grid: Vec<(f64, Term)> = candidate
         .variants(obs)
         .into_iter()
         .filter_map(|t| match t.family {
-            Family::Periodic { period } => {
-                Some((period, projector.increment(&t.columns).delta_rss, t))
-            }
+            Family::Periodic { period } => Some((period, t)),
             _ => None,
         })
+        .collect();
+    let increments = projector.increments(grid.len(), |i| Cow::Borrowed(&grid[i].1.columns));
+    let profile: Vec<(f64, f64, Term)> = grid
+        .into_iter()
+        .zip(increments)
+        .map(|((period, t), inc)| (period, inc.delta_rss, t))
         .collect();
     // Local optima on the grid, away from the chosen period, the best few refined between their
     // grid neighbours (a grid point can sit half a step off its optimum).

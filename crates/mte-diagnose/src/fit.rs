@@ -1,7 +1,9 @@
 //! Weighted least squares over blocks of terms, blocked cross-validation, and the projection
 //! that scores a candidate against the current model.
 
-use mte_linalg::bridge::{as_faer, faer_to_dmat};
+use std::borrow::Cow;
+
+use mte_linalg::bridge::{as_faer, product};
 use mte_linalg::{DMat, DVec};
 
 use crate::data::Observations;
@@ -74,10 +76,10 @@ pub(crate) fn solve(x: &DMat, y: &DVec, w: &DVec) -> Solution {
             observations,
         };
     }
-    let (r, qty, scale) = if n > QR_BLOCK {
-        whitened_r_streamed(x, y, w)
-    } else {
+    let (r, qty, scale) = if n > p {
         whitened_r(x, y, w)
+    } else {
+        whitened(x, y, w)
     };
     let svd = r.svd(true, true);
     let (u, vt) = (svd.u.expect("requested"), svd.v_t.expect("requested"));
@@ -112,39 +114,36 @@ pub(crate) fn solve(x: &DMat, y: &DVec, w: &DVec) -> Solution {
     }
 }
 
-/// R and Qᵀy of the whitened, column-normalised design and observations (Householder QR of
-/// the whole design), with the column scale factors.
-fn whitened_r(x: &DMat, y: &DVec, w: &DVec) -> (DMat, DVec, DVec) {
-    let (n, p) = x.shape();
+/// The whitened, column-normalised design and observations as they are (fewer rows than
+/// columns: nothing to triangularise), with the column scale factors.
+fn whitened(x: &DMat, y: &DVec, w: &DVec) -> (DMat, DVec, DVec) {
     let mut xw = x.clone();
     for (i, wi) in w.iter().enumerate() {
         xw.row_mut(i).scale_mut(*wi);
     }
-    let scale: DVec = DVec::from_iterator(
-        p,
-        xw.column_iter().map(|c| {
-            let n = c.norm();
-            if n > 0.0 { 1.0 / n } else { 1.0 }
-        }),
-    );
+    let scale = column_scales(&xw);
     for (j, s) in scale.iter().enumerate() {
         xw.column_mut(j).scale_mut(*s);
     }
-    let yw = y.component_mul(w);
-    if n >= p {
-        let qr = xw.qr();
-        let mut qty = yw.clone();
-        qr.q_tr_mul(&mut qty);
-        qty.resize_vertically_mut(p, 0.0);
-        (qr.r(), qty, scale)
-    } else {
-        (xw, yw, scale)
-    }
+    (xw, y.component_mul(w), scale)
 }
 
-/// [`whitened_r`] for a long record: the design is whitened row by row into the blocks of a
-/// streamed QR with the observations as a last column, so no copy of it is made.
-fn whitened_r_streamed(x: &DMat, y: &DVec, w: &DVec) -> (DMat, DVec, DVec) {
+/// The reciprocal norms of the columns of `a` (1 for a zero column).
+fn column_scales(a: &DMat) -> DVec {
+    DVec::from_iterator(
+        a.ncols(),
+        a.column_iter().map(|c| {
+            let n = c.norm();
+            if n > 0.0 { 1.0 / n } else { 1.0 }
+        }),
+    )
+}
+
+/// R and Qᵀy of the whitened, column-normalised design and observations, with the column
+/// scale factors: the design is whitened row by row into the blocks of a streamed QR (faer's
+/// blocked Householder) with the observations as a last column, so a long record is never
+/// copied whole.
+fn whitened_r(x: &DMat, y: &DVec, w: &DVec) -> (DMat, DVec, DVec) {
     let (n, p) = x.shape();
     let scale: DVec = DVec::from_iterator(
         p,
@@ -158,11 +157,18 @@ fn whitened_r_streamed(x: &DMat, y: &DVec, w: &DVec) -> (DMat, DVec, DVec) {
             if n > 0.0 { 1.0 / n } else { 1.0 }
         }),
     );
-    let ra = streamed_r(n, p + 1, &|i, out| {
+    let ra = streamed_r(n, p + 1, &|start, len| {
+        let mut block = DMat::zeros(len, p + 1);
         for j in 0..p {
-            out[j] = x[(i, j)] * w[i] * scale[j];
+            let (xj, s) = (x.column(j), scale[j]);
+            for (i, b) in block.column_mut(j).iter_mut().enumerate() {
+                *b = xj[start + i] * w[start + i] * s;
+            }
         }
-        out[p] = y[i] * w[i];
+        for (i, b) in block.column_mut(p).iter_mut().enumerate() {
+            *b = y[start + i] * w[start + i];
+        }
+        block
     });
     (
         ra.view((0, 0), (p, p)).into_owned(),
@@ -174,12 +180,12 @@ fn whitened_r_streamed(x: &DMat, y: &DVec, w: &DVec) -> (DMat, DVec, DVec) {
 /// Rows per block of [`streamed_r`].
 const QR_BLOCK: usize = 32_768;
 
-/// The triangular factor R (m × m) of the thin QR of the n × m matrix (n ≥ m) whose row `i`
-/// `row(i, ·)` writes, in blocks of rows: R of the matrix stacked on the previous blocks' R
-/// (the tall-skinny QR), so memory stays at a block whatever the length of the record.
-pub(crate) fn streamed_r(n: usize, m: usize, row: &dyn Fn(usize, &mut [f64])) -> DMat {
+/// The triangular factor R (m × m) of the thin QR of the n × m matrix (n ≥ m) whose rows
+/// `start..start + len` `rows(start, len)` gives, in blocks of rows: R of the block stacked on
+/// the previous blocks' R (the tall-skinny QR), so memory stays at a block whatever the length
+/// of the record.
+pub(crate) fn streamed_r(n: usize, m: usize, rows: &dyn Fn(usize, usize) -> DMat) -> DMat {
     let mut r: Option<DMat> = None;
-    let mut buffer = vec![0.0; m];
     let mut start = 0;
     while start < n {
         let end = (start + QR_BLOCK).min(n);
@@ -188,12 +194,9 @@ pub(crate) fn streamed_r(n: usize, m: usize, row: &dyn Fn(usize, &mut [f64])) ->
         if let Some(r) = &r {
             block.rows_mut(0, top).copy_from(r);
         }
-        for i in start..end {
-            row(i, &mut buffer);
-            for (j, v) in buffer.iter().enumerate() {
-                block[(top + i - start, j)] = *v;
-            }
-        }
+        block
+            .rows_mut(top, end - start)
+            .copy_from(&rows(start, end - start));
         r = Some(if block.nrows() >= m {
             mte_linalg::lstsq::qr_r(&block)
         } else {
@@ -328,13 +331,9 @@ pub(crate) struct Increment {
     pub separability: f64,
 }
 
-/// `aᵀ b`, the inner loop of every scan: on a long record by faer's blocked, vectorised product.
+/// `aᵀ b`, the inner loop of every scan, by faer's blocked, vectorised product.
 fn tr_mul(a: &DMat, b: &DMat) -> DMat {
-    if a.nrows() <= QR_BLOCK {
-        return a.tr_mul(b);
-    }
-    let product = as_faer(a).transpose() * as_faer(b);
-    faer_to_dmat(product.as_ref())
+    product(as_faer(a).transpose(), as_faer(b))
 }
 
 impl Projector {
@@ -379,7 +378,57 @@ impl Projector {
     /// eigenvalue is the squared separability, and the RSS falls by `bᵀ G⁺ b` with
     /// `b = Cᵀr − (QᵀC)ᵀ(Qᵀr)`. No n × k matrix beyond the whitened columns is formed.
     pub fn increment(&self, c: &DMat) -> Increment {
-        let k = c.ncols();
+        self.increments(1, |_| Cow::Borrowed(c))
+            .pop()
+            .expect("one candidate")
+    }
+
+    /// [`Projector::increment`] of `count` candidates whose columns `candidate(i)` gives: their
+    /// whitened columns go through one product with the model's basis per batch of about
+    /// [`BATCH_COLUMNS`], not one each — a scan over a grid of periods reads the basis once per
+    /// batch instead of once per period. The columns are built one batch at a time.
+    pub fn increments<'a>(
+        &self,
+        count: usize,
+        candidate: impl Fn(usize) -> Cow<'a, DMat>,
+    ) -> Vec<Increment> {
+        let n = self.w.len();
+        let batch_columns = (BATCH_VALUES / n.max(1)).clamp(1, BATCH_COLUMNS);
+        let mut out = Vec::with_capacity(count);
+        let mut next = 0;
+        while next < count {
+            let mut batch = Vec::new();
+            let mut width = 0;
+            while next < count && (batch.is_empty() || width < batch_columns) {
+                let c = candidate(next);
+                width += c.ncols();
+                batch.push(c);
+                next += 1;
+            }
+            let mut cw = DMat::zeros(n, width);
+            let mut at = 0;
+            for c in &batch {
+                cw.columns_mut(at, c.ncols()).copy_from(c.as_ref());
+                at += c.ncols();
+            }
+            for (i, wi) in self.w.iter().enumerate() {
+                cw.row_mut(i).scale_mut(*wi);
+            }
+            let a = (self.q.ncols() > 0).then(|| tr_mul(&self.q, &cw));
+            let mut at = 0;
+            for c in &batch {
+                let k = c.ncols();
+                let ak = a.as_ref().map(|a| a.columns(at, k).into_owned());
+                out.push(self.increment_of(&cw.columns(at, k).into_owned(), ak.as_ref()));
+                at += k;
+            }
+        }
+        out
+    }
+
+    /// The increment of whitened candidate columns `cw` with `a = Qᵀ cw` (`None`: no model).
+    fn increment_of(&self, cw: &DMat, a: Option<&DMat>) -> Increment {
+        let k = cw.ncols();
         let none = Increment {
             delta_rss: 0.0,
             new_rank: 0,
@@ -388,19 +437,14 @@ impl Projector {
         if k == 0 {
             return none;
         }
-        let mut cw = c.clone();
-        for (i, wi) in self.w.iter().enumerate() {
-            cw.row_mut(i).scale_mut(*wi);
-        }
         let norms: Vec<f64> = cw.column_iter().map(|c| c.norm()).collect();
         if norms.iter().any(|n| n.is_nan() || *n <= 0.0) {
             return none;
         }
-        let mut g = cw.tr_mul(&cw);
+        let mut g = cw.tr_mul(cw);
         let mut b = cw.tr_mul(&self.rw);
-        if self.q.ncols() > 0 {
-            let a = tr_mul(&self.q, &cw);
-            g -= a.tr_mul(&a);
+        if let Some(a) = a {
+            g -= a.tr_mul(a);
             b -= a.tr_mul(&self.qtr);
         }
         for i in 0..k {
@@ -430,16 +474,24 @@ impl Projector {
     }
 }
 
+/// Candidate columns per product with the model's basis in [`Projector::increments`]: wide
+/// enough that reading the basis is paid once for many candidates.
+const BATCH_COLUMNS: usize = 128;
+
+/// Values (rows × columns) of a batch at most, so a long record's batch stays at 32 MB.
+const BATCH_VALUES: usize = 4_000_000;
+
 /// Orthonormal basis of the column space of `a` (relative tolerance). For a tall `a`: the
 /// streamed QR's `R = U S Vᵀ` gives the left singular vectors as `a V S⁻¹` (restricted to the
 /// kept directions), orthogonalised once more by a second streamed QR — memory stays at two
-/// copies of `a` on a long record; up to [`QR_BLOCK`] rows from the SVD of `a`.
+/// copies of `a` on a long record, and the work is faer's blocked QR and products, not an SVD
+/// of `a` (which costs many times more); a wide `a` from its SVD.
 pub(crate) fn orthonormal_basis(a: &DMat) -> DMat {
     let (n, p) = a.shape();
     if p == 0 {
         return DMat::zeros(n, 0);
     }
-    if n <= QR_BLOCK {
+    if n < p {
         let svd = a.clone().svd(true, false);
         let smax = svd.singular_values.max();
         let u = svd.u.expect("requested");
@@ -448,11 +500,7 @@ pub(crate) fn orthonormal_basis(a: &DMat) -> DMat {
             .collect();
         return DMat::from_fn(n, keep.len(), |i, j| u[(i, keep[j])]);
     }
-    let r = streamed_r(n, p, &|i, out| {
-        for (j, o) in out.iter_mut().enumerate() {
-            *o = a[(i, j)];
-        }
-    });
+    let r = streamed_r(n, p, &|start, len| a.rows(start, len).into_owned());
     let svd = r.svd(false, true);
     let vt = svd.v_t.expect("requested");
     let smax = svd.singular_values.max();
@@ -461,13 +509,9 @@ pub(crate) fn orthonormal_basis(a: &DMat) -> DMat {
         .collect();
     let k = keep.len();
     let map = DMat::from_fn(p, k, |i, j| vt[(keep[j], i)] / svd.singular_values[keep[j]]);
-    let q1 = faer_to_dmat((as_faer(a) * as_faer(&map)).as_ref());
+    let q1 = product(as_faer(a), as_faer(&map));
     // A second pass removes the loss of orthogonality of the first (ε · condition number).
-    let r2 = streamed_r(n, k, &|i, out| {
-        for (j, o) in out.iter_mut().enumerate() {
-            *o = q1[(i, j)];
-        }
-    });
+    let r2 = streamed_r(n, k, &|start, len| q1.rows(start, len).into_owned());
     let Some(inv) = r2.try_inverse().filter(|m| m.iter().all(|v| v.is_finite())) else {
         return q1;
     };
@@ -512,8 +556,14 @@ mod tests {
     fn streamed_qr_matches_the_householder_qr() {
         let n = 3 * QR_BLOCK + 17;
         let (x, y, w) = problem(n);
-        let (r1, qty1, _) = whitened_r(&x, &y, &w);
-        let (r2, qty2, _) = whitened_r_streamed(&x, &y, &w);
+        // The reference: nalgebra's Householder QR of the whole whitened design.
+        let (xw, yw, _) = whitened(&x, &y, &w);
+        let qr = xw.qr();
+        let r1 = qr.r();
+        let mut qty1 = yw;
+        qr.q_tr_mul(&mut qty1);
+        qty1.resize_vertically_mut(x.ncols(), 0.0);
+        let (r2, qty2, _) = whitened_r(&x, &y, &w);
         // RᵀR = AᵀA and Rᵀ(Qᵀy) = Aᵀy whatever the signs (and, with a dependent column, the
         // undetermined trailing rows) of R.
         let (g1, g2) = (r1.tr_mul(&r1), r2.tr_mul(&r2));

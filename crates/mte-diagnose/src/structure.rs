@@ -1,6 +1,8 @@
 //! Structure tests of residuals: does what the model leaves over still depend on an axis
 //! position, on time, on the direction of motion, periodically on position, or on the setup?
 
+use std::borrow::Cow;
+
 use mte_linalg::{DMat, DVec, stats};
 use serde::Serialize;
 
@@ -120,19 +122,19 @@ pub(crate) fn structure_tests(
                             .expect("the thinned observations have the same variables")
                             .values;
                         let periods = periods_to_scan(scan_values, rotary);
-                        let mut best: Option<(f64, f64)> = None;
-                        for &p in &periods {
-                            let inc = {
-                                let mut c = sin_cos_columns(scan_values, p);
-                                for (i, &channel) in scan_obs.channel.iter().enumerate() {
-                                    if channel != ch {
-                                        c.row_mut(i).fill(0.0);
-                                    }
+                        let increments = scan_projector.increments(periods.len(), |k| {
+                            let mut c = sin_cos_columns(scan_values, periods[k]);
+                            for (i, &channel) in scan_obs.channel.iter().enumerate() {
+                                if channel != ch {
+                                    c.row_mut(i).fill(0.0);
                                 }
-                                scan_projector.increment(&c).delta_rss
-                            };
-                            if best.is_none_or(|(_, d)| inc > d) {
-                                best = Some((p, inc));
+                            }
+                            Cow::Owned(c)
+                        });
+                        let mut best: Option<(f64, f64)> = None;
+                        for (&p, inc) in periods.iter().zip(increments) {
+                            if best.is_none_or(|(_, d)| inc.delta_rss > d) {
+                                best = Some((p, inc.delta_rss));
                             }
                         }
                         if let Some((p, _)) = best {

@@ -205,6 +205,29 @@ pub fn dvec_to_faer_col(v: &DVec) -> faer::Col<f64> {
     vec_as_faer(v).to_owned()
 }
 
+/// The product `a b` by faer, sequential (the same bits whatever the thread count; callers
+/// parallelise above it), into a new nalgebra matrix.
+///
+/// # Example
+/// ```
+/// use mte_linalg::bridge::{DMat, as_faer, product};
+/// let a = DMat::from_row_slice(2, 3, &[1.0, 2.0, 3.0, 4.0, 5.0, 6.0]);
+/// let p = product(as_faer(&a).transpose(), as_faer(&a));
+/// assert_eq!(p, a.transpose() * &a);
+/// ```
+pub fn product(a: MatRef<'_, f64>, b: MatRef<'_, f64>) -> DMat {
+    let mut out = DMat::zeros(a.nrows(), b.ncols());
+    faer::linalg::matmul::matmul(
+        as_faer_mut(&mut out),
+        faer::Accum::Replace,
+        a,
+        b,
+        1.0,
+        faer::Par::Seq,
+    );
+    out
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

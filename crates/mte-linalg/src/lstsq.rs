@@ -29,8 +29,11 @@
 //! # Ok::<(), mte_linalg::LinalgError>(())
 //! ```
 
-use crate::bridge::{DMat, DVec, as_faer, faer_col_to_dvec, faer_to_dmat, vec_as_faer};
+use crate::bridge::{
+    DMat, DVec, as_faer, as_faer_mut, faer_col_to_dvec, faer_to_dmat, vec_as_faer,
+};
 use crate::error::{LinalgError, Result};
+use faer::Par;
 use faer::linalg::solvers::SolveLstsq;
 
 /// Coefficients of a null-space combination smaller than this (relative to the leading
@@ -424,7 +427,8 @@ pub fn lstsq_qr(a: &DMat, b: &DVec) -> Result<DVec> {
 }
 
 /// The triangular factor `R` (n × n) of the thin QR decomposition `A = Q R` of a tall `A`
-/// (m ≥ n), by faer's blocked Householder QR. Appending the right-hand side as a last column
+/// (m ≥ n), by faer's blocked Householder QR, sequential (the same bits whatever the thread
+/// count). Appending the right-hand side as a last column
 /// gives `Qᵀb` in that column's top rows and the residual norm in its last entry, without
 /// forming `Q`.
 ///
@@ -437,10 +441,26 @@ pub fn lstsq_qr(a: &DMat, b: &DVec) -> Result<DVec> {
 /// assert!(((r.transpose() * &r) - a.transpose() * &a).norm() < 1e-12);
 /// ```
 pub fn qr_r(a: &DMat) -> DMat {
-    let n = a.ncols().min(a.nrows());
-    let qr = as_faer(a).qr();
-    let r = qr.thin_R();
-    DMat::from_fn(n, a.ncols(), |i, j| if i <= j { *r.get(i, j) } else { 0.0 })
+    use faer::dyn_stack::{MemBuffer, MemStack};
+    use faer::linalg::qr::no_pivoting::factor;
+    let (m, n) = a.shape();
+    let size = m.min(n);
+    if size == 0 {
+        return DMat::zeros(0, n);
+    }
+    // Sequential: the same bits whatever the thread count (callers parallelise above it).
+    let mut qr = a.clone();
+    let block = factor::recommended_block_size::<f64>(m, n);
+    let mut coeff = faer::Mat::<f64>::zeros(block, size);
+    let scratch = factor::qr_in_place_scratch::<f64>(m, n, block, Par::Seq, Default::default());
+    factor::qr_in_place(
+        as_faer_mut(&mut qr),
+        coeff.as_mut(),
+        Par::Seq,
+        MemStack::new(&mut MemBuffer::new(scratch)),
+        Default::default(),
+    );
+    DMat::from_fn(size, n, |i, j| if i <= j { qr[(i, j)] } else { 0.0 })
 }
 
 /// Minimum-norm least squares `x = A⁺ b` (SVD): of all minimisers of ‖A x − b‖ the one with the
