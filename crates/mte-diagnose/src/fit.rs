@@ -121,21 +121,18 @@ fn whitened(x: &DMat, y: &DVec, w: &DVec) -> (DMat, DVec, DVec) {
     for (i, wi) in w.iter().enumerate() {
         xw.row_mut(i).scale_mut(*wi);
     }
-    let scale = column_scales(&xw);
+    let scale = reciprocal_norms((0..xw.ncols()).map(|j| xw.column(j).norm()));
     for (j, s) in scale.iter().enumerate() {
         xw.column_mut(j).scale_mut(*s);
     }
     (xw, y.component_mul(w), scale)
 }
 
-/// The reciprocal norms of the columns of `a` (1 for a zero column).
-fn column_scales(a: &DMat) -> DVec {
+/// The column scale factors of a design from its columns' norms (1 for a zero column).
+fn reciprocal_norms(norms: impl ExactSizeIterator<Item = f64>) -> DVec {
     DVec::from_iterator(
-        a.ncols(),
-        a.column_iter().map(|c| {
-            let n = c.norm();
-            if n > 0.0 { 1.0 / n } else { 1.0 }
-        }),
+        norms.len(),
+        norms.map(|n| if n > 0.0 { 1.0 / n } else { 1.0 }),
     )
 }
 
@@ -145,18 +142,14 @@ fn column_scales(a: &DMat) -> DVec {
 /// copied whole.
 fn whitened_r(x: &DMat, y: &DVec, w: &DVec) -> (DMat, DVec, DVec) {
     let (n, p) = x.shape();
-    let scale: DVec = DVec::from_iterator(
-        p,
-        x.column_iter().map(|c| {
-            let n = c
-                .iter()
-                .zip(w.iter())
-                .map(|(v, w)| (v * w).powi(2))
-                .sum::<f64>()
-                .sqrt();
-            if n > 0.0 { 1.0 / n } else { 1.0 }
-        }),
-    );
+    let scale = reciprocal_norms((0..p).map(|j| {
+        x.column(j)
+            .iter()
+            .zip(w.iter())
+            .map(|(v, w)| (v * w).powi(2))
+            .sum::<f64>()
+            .sqrt()
+    }));
     let ra = streamed_r(n, p + 1, &|start, len| {
         let mut block = DMat::zeros(len, p + 1);
         for j in 0..p {
