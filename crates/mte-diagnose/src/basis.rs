@@ -44,10 +44,28 @@ pub(crate) fn legendre(n: usize, u: f64) -> Vec<f64> {
 /// `sin(2π v / period)` and `cos(2π v / period)`.
 pub(crate) fn sin_cos_columns(values: &[f64], period: f64) -> DMat {
     let n = values.len();
-    DMat::from_fn(n, 2, |i, j| {
-        let phase = std::f64::consts::TAU * values[i] / period;
-        if j == 0 { phase.sin() } else { phase.cos() }
-    })
+    let mut m = DMat::zeros(n, 2);
+    for (i, &v) in values.iter().enumerate() {
+        let (s, c) = sin_cos_turns(v / period);
+        m[(i, 0)] = s;
+        m[(i, 1)] = c;
+    }
+    m
+}
+
+/// `sin(2π x)` and `cos(2π x)`, reduced to an eighth of a turn in `x` first: exact
+/// reduction (the subtraction of a nearby multiple of ¼ is exact), then the trigonometric
+/// functions on |phase| ≤ π/4, their fast path — the scans evaluate millions of them.
+fn sin_cos_turns(x: f64) -> (f64, f64) {
+    let quarters = (4.0 * x).round();
+    let phase = std::f64::consts::TAU * (x - 0.25 * quarters);
+    let (s, c) = (phase.sin(), phase.cos());
+    match quarters.rem_euclid(4.0) as u8 {
+        0 => (s, c),
+        1 => (c, -s),
+        2 => (-s, -c),
+        _ => (-c, s),
+    }
 }
 
 /// Periods to scan along an axis.
@@ -186,6 +204,20 @@ pub(crate) fn splitmix64(i: u64) -> u64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn sin_cos_of_turns_matches_the_library_functions() {
+        for k in -2000..2000 {
+            // Positions in mm over periods of a few mm and of a turn: phases up to ~10⁴ rad.
+            let x = k as f64 * 0.3711 / 0.987;
+            let (s, c) = sin_cos_turns(x);
+            let phase = std::f64::consts::TAU * x;
+            // The library's own reduction of the rounded phase is off by up to ulp(phase).
+            let tol = 4.0 * f64::EPSILON * phase.abs().max(1.0);
+            assert!((s - phase.sin()).abs() < tol, "sin at {x}");
+            assert!((c - phase.cos()).abs() < tol, "cos at {x}");
+        }
+    }
 
     #[test]
     fn legendre_matches_closed_forms() {

@@ -13,8 +13,8 @@ use serde::Serialize;
 use crate::candidate::Candidate;
 use crate::data::Observations;
 use crate::fit::{
-    Folds, Increment, Projector, SEPARABILITY_TOLERANCE, Solution, design, max_abs, rms, solve,
-    whitening,
+    FoldFits, Folds, Increment, Projector, SEPARABILITY_TOLERANCE, Solution, design, max_abs, rms,
+    solve, whitening,
 };
 use crate::structure::{StructureTest, structure_tests};
 use crate::term::{Estimate, Family, Quantity, Summary, Term};
@@ -383,7 +383,7 @@ pub fn diagnose(
     );
     // The search on all data and the outer folds' searches are independent: run them together.
     let (mut search, held_out) = rayon::join(
-        || searcher.search(&w_s, &folds_s),
+        || searcher.search(&w_s, &folds_s, true),
         || searcher.held_out(&w_s),
     );
     drop(pool);
@@ -754,12 +754,18 @@ impl Pool {
         let n = obs.len();
         let mut variants = Vec::new();
         let mut source = Vec::new();
-        for (k, c) in candidates.iter().enumerate() {
-            let v: Vec<Term> = c
-                .variants(obs)
-                .into_iter()
-                .filter(|t| !t.is_invisible() && t.columns.nrows() == n)
-                .collect();
+        // Building the variants (a scan's columns for every period) is independent per
+        // candidate; collected in order, so the pool is the same for any thread count.
+        let built: Vec<Vec<Term>> = candidates
+            .par_iter()
+            .map(|c| {
+                c.variants(obs)
+                    .into_iter()
+                    .filter(|t| !t.is_invisible() && t.columns.nrows() == n)
+                    .collect()
+            })
+            .collect();
+        for (k, v) in built.into_iter().enumerate() {
             if v.is_empty() || base.iter().any(|b| b.name == v[0].name) {
                 continue;
             }
@@ -830,15 +836,16 @@ impl Searcher<'_> {
     }
 
     /// Completes the base, then searches for causes on top of it. Observations of weight zero
-    /// take no part.
-    fn search(&self, w: &DVec, folds: &Folds) -> SearchResult {
+    /// take no part. `explain`: record which candidates the data cannot separate from the base
+    /// (for the report; an outer fold's search only needs its causes).
+    fn search(&self, w: &DVec, folds: &Folds, explain: bool) -> SearchResult {
         let completed = self.complete(w);
         let base: Vec<Term> = self.base.iter().chain(&completed).cloned().collect();
         let mut found = Searcher {
             base: &base,
             ..*self
         }
-        .search_causes(w, folds);
+        .search_causes(w, folds, explain);
         found.completed = completed;
         found
     }
@@ -888,13 +895,10 @@ impl Searcher<'_> {
                 Some((ci, p)) if p * (eligible.len() as f64) < COMPLETION_LEVEL => {
                     used[ci] = true;
                     // Only the block's columns the model does not have yet.
-                    let mut with: Vec<Term> = terms.into_iter().cloned().collect();
-                    with.push(self.pool.variants[ci][0].clone());
-                    let (kept, _) = separable_base(with, w);
-                    let name = &self.pool.variants[ci][0].name;
-                    match kept.into_iter().last().filter(|t| &t.name == name) {
-                        Some(t) => done.push(t),
-                        None => continue,
+                    let t = &self.pool.variants[ci][0];
+                    let keep = projector.separable_columns(&t.columns);
+                    if !keep.is_empty() {
+                        done.push(keep_columns(t.clone(), &keep));
                     }
                 }
                 _ => break,
@@ -904,7 +908,7 @@ impl Searcher<'_> {
     }
 
     /// Forward search, then backward pruning.
-    fn search_causes(&self, w: &DVec, folds: &Folds) -> SearchResult {
+    fn search_causes(&self, w: &DVec, folds: &Folds, explain: bool) -> SearchResult {
         let obs = self.obs;
         let params = self.params;
         let y = &obs.values;
@@ -930,10 +934,11 @@ impl Searcher<'_> {
         let mut terms = model_terms(&chosen);
         let mut x = design(&terms.iter().collect::<Vec<_>>(), obs.len());
         let mut sol = solve(&x, y, w);
-        let mut cv_rms = folds.rms(&folds.residuals(&x, y, w));
 
         loop {
             let projector = Projector::new(&x, w, &sol.residuals);
+            let fold_fits = FoldFits::new(folds, &x, y, w);
+            let cv_rms = fold_fits.rms();
             let dof = sol.dof();
             // A cause that builds on a term needs the term in the model: by name, or as a
             // combination of model terms (an absolute location error when the relative ones
@@ -985,7 +990,7 @@ impl Searcher<'_> {
                     }
                 }
                 let Some((vi, mut inc)) = best else {
-                    if steps.is_empty() {
+                    if explain && steps.is_empty() {
                         record_not_separable(
                             &mut not_separable,
                             &self.pool.variants[ci][0],
@@ -1022,7 +1027,7 @@ impl Searcher<'_> {
                 let t = variant(&overrides, ci, vi);
                 let mut cv = None;
                 if p < params.alpha {
-                    let r = folds.rms(&folds.residuals(&hcat(&x, &t.columns), y, w));
+                    let r = fold_fits.rms_with(&t.columns);
                     cv = Some(r);
                     let better = match best {
                         None => true,
@@ -1135,7 +1140,6 @@ impl Searcher<'_> {
             terms = model_terms(&chosen);
             x = design(&terms.iter().collect::<Vec<_>>(), obs.len());
             sol = solve(&x, y, w);
-            cv_rms = folds.rms(&folds.residuals(&x, y, w));
         }
         let pruned = self.prune(&mut chosen, w, folds);
         SearchResult {
@@ -1153,14 +1157,27 @@ impl Searcher<'_> {
     fn refit_scanned(&self, chosen: &mut [Chosen], w: &DVec) {
         let n = self.obs.len();
         for j in 0..chosen.len() {
+            // The model without term j, factorised once (when the candidate refines at all): a
+            // trial term's RSS is that model's minus the trial's increment.
+            let others = std::cell::OnceCell::new();
             let rss_with = |t: &Term| {
-                let mut terms: Vec<&Term> = self.base.iter().collect();
-                terms.extend(chosen.iter().enumerate().map(
-                    |(k, c)| {
-                        if k == j { t } else { &c.term }
-                    },
-                ));
-                solve(&design(&terms, n), &self.obs.values, w).rss_w
+                let (rss, projector) = others.get_or_init(|| {
+                    let terms: Vec<&Term> = self
+                        .base
+                        .iter()
+                        .chain(
+                            chosen
+                                .iter()
+                                .enumerate()
+                                .filter(|(k, _)| *k != j)
+                                .map(|(_, c)| &c.term),
+                        )
+                        .collect();
+                    let x = design(&terms, n);
+                    let sol = solve(&x, &self.obs.values, w);
+                    (sol.rss_w, Projector::new(&x, w, &sol.residuals))
+                });
+                rss - projector.increment(&t.columns).delta_rss
             };
             let Some(refined) = self
                 .chosen_candidate(&chosen[j])
@@ -1282,7 +1299,7 @@ impl Searcher<'_> {
                     self.params.folds,
                     self.params.blocks_per_fold,
                 );
-                let found = self.search(&w_train, &inner);
+                let found = self.search(&w_train, &inner, false);
                 let completed: Vec<Term> =
                     self.base.iter().chain(&found.completed).cloned().collect();
                 let base = solve(
@@ -1797,6 +1814,22 @@ fn complexity(t: &Term) -> (usize, usize) {
 /// (whitened, at least [`SEPARABILITY_TOLERANCE`] of its norm outside the kept ones); a term that
 /// loses some columns keeps the others. The dropped ones are reported with what they are
 /// confounded with.
+/// `t` with only its columns `keep` (itself when it keeps all); a term that lost some reports
+/// each coefficient.
+fn keep_columns(t: Term, keep: &[usize]) -> Term {
+    if keep.len() == t.width() {
+        return t;
+    }
+    Term {
+        columns: DMat::from_fn(t.columns.nrows(), keep.len(), |i, k| {
+            t.columns[(i, keep[k])]
+        }),
+        coefficients: keep.iter().map(|&k| t.coefficients[k].clone()).collect(),
+        summary: Summary::EachCoefficient,
+        ..t
+    }
+}
+
 fn separable_base(base: Vec<Term>, w: &DVec) -> (Vec<Term>, Vec<NotSeparable>) {
     let mut basis: Vec<DVec> = Vec::new(); // orthonormal, whitened
     let mut kept: Vec<Term> = Vec::new();
@@ -1824,17 +1857,8 @@ fn separable_base(base: Vec<Term>, w: &DVec) -> (Vec<Term>, Vec<NotSeparable>) {
                 dropped.push((t.clone(), j));
             }
         }
-        if keep.len() == t.width() {
-            kept.push(t);
-        } else if !keep.is_empty() {
-            kept.push(Term {
-                columns: DMat::from_fn(t.columns.nrows(), keep.len(), |i, k| {
-                    t.columns[(i, keep[k])]
-                }),
-                coefficients: keep.iter().map(|&k| t.coefficients[k].clone()).collect(),
-                summary: Summary::EachCoefficient,
-                ..t
-            });
+        if !keep.is_empty() {
+            kept.push(keep_columns(t, &keep));
         }
     }
     let not_separable = dropped

@@ -6,6 +6,9 @@ use std::borrow::Cow;
 use mte_linalg::bridge::{as_faer, product};
 use mte_linalg::{DMat, DVec};
 
+/// A borrowed block of columns.
+type DMatView<'a> = mte_linalg::nalgebra::DMatrixView<'a, f64>;
+
 use crate::data::Observations;
 use crate::term::Term;
 
@@ -288,6 +291,124 @@ impl Folds {
     }
 }
 
+/// The folds' fits of one model, kept to score candidates added to it: per fold an orthonormal
+/// basis of the whitened, column-normalised training design (the directions [`solve`] keeps,
+/// same tolerance) and the map from it to the coefficients. A candidate's out-of-fold residuals
+/// then cost products with the basis, not a fresh factorisation per fold.
+pub(crate) struct FoldFits<'a> {
+    folds: &'a Folds,
+    x: &'a DMat,
+    y: &'a DVec,
+    w: &'a DVec,
+    fits: Vec<FoldFit>,
+}
+
+struct FoldFit {
+    /// Orthonormal basis of the whitened training design (training rows × rank).
+    q: DMat,
+    /// Coefficients from basis coordinates: `x_train · diag(w) · map = q`.
+    map: DMat,
+    /// `qᵀ · (whitened training observations)`.
+    qty: DVec,
+    /// Whitened training residuals of the model.
+    residuals: DVec,
+}
+
+impl<'a> FoldFits<'a> {
+    /// Fits the model with design `x` on every fold's training rows.
+    pub fn new(folds: &'a Folds, x: &'a DMat, y: &'a DVec, w: &'a DVec) -> FoldFits<'a> {
+        let fits = folds
+            .train
+            .iter()
+            .map(|train| {
+                let wt = select(w, train);
+                let mut xw = select_rows(x, train);
+                for mut column in xw.column_iter_mut() {
+                    column.component_mul_assign(&wt);
+                }
+                let scale = reciprocal_norms(xw.column_iter().map(|c| c.norm()));
+                for (mut column, s) in xw.column_iter_mut().zip(scale.iter()) {
+                    column.scale_mut(*s);
+                }
+                let (q, map) = orthonormal_basis_and_map(&xw);
+                let map = DMat::from_fn(map.nrows(), map.ncols(), |i, j| map[(i, j)] * scale[i]);
+                let yw = select(y, train).component_mul(&wt);
+                let qty = q.tr_mul(&yw);
+                let residuals = &yw - &q * &qty;
+                FoldFit {
+                    q,
+                    map,
+                    qty,
+                    residuals,
+                }
+            })
+            .collect();
+        FoldFits {
+            folds,
+            x,
+            y,
+            w,
+            fits,
+        }
+    }
+
+    /// RMS of the out-of-fold residuals of the model.
+    pub fn rms(&self) -> f64 {
+        self.rms_with(&DMat::zeros(self.x.nrows(), 0))
+    }
+
+    /// RMS of the out-of-fold residuals of the model with the columns `c` added (the same as
+    /// [`Folds::residuals`] of the wider design, up to rounding).
+    pub fn rms_with(&self, c: &DMat) -> f64 {
+        let mut out = DVec::zeros(self.y.len());
+        for (fit, (train, test)) in self
+            .fits
+            .iter()
+            .zip(self.folds.train.iter().zip(&self.folds.test))
+        {
+            let k = c.ncols();
+            let mut gamma = DVec::zeros(k);
+            let mut coef_q = fit.qty.clone();
+            if k > 0 {
+                let mut cw = select_rows(c, train);
+                let wt = select(self.w, train);
+                for mut column in cw.column_iter_mut() {
+                    column.component_mul_assign(&wt);
+                }
+                let norms = reciprocal_norms(cw.column_iter().map(|c| c.norm()));
+                for (mut column, s) in cw.column_iter_mut().zip(norms.iter()) {
+                    column.scale_mut(*s);
+                }
+                let a = tr_mul(&fit.q, &cw);
+                let perp = &cw - &fit.q * &a;
+                let g = perp.tr_mul(&perp);
+                let b = perp.tr_mul(&fit.residuals);
+                let eig = g.symmetric_eigen();
+                let lambda_max = eig.eigenvalues.max().max(0.0);
+                for (i, &l) in eig.eigenvalues.iter().enumerate() {
+                    // The tolerance of [`Projector::increments`]: directions with less than 1e-6
+                    // of their norm left are rounding.
+                    if l > 1e-12 && l > 1e-12 * lambda_max {
+                        let v = eig.eigenvectors.column(i);
+                        gamma += v * (v.dot(&b) / l);
+                    }
+                }
+                coef_q -= &a * &gamma;
+                gamma.component_mul_assign(&norms);
+            }
+            let beta = &fit.map * &coef_q;
+            for &i in test {
+                let mut pred = self.x.row(i).dot(&beta.transpose());
+                if k > 0 {
+                    pred += c.row(i).dot(&gamma.transpose());
+                }
+                out[i] = self.y[i] - pred;
+            }
+        }
+        self.folds.rms(&out)
+    }
+}
+
 /// Root mean square of a vector.
 pub(crate) fn rms(v: &DVec) -> f64 {
     if v.is_empty() {
@@ -351,11 +472,55 @@ impl Projector {
         }
     }
 
+    /// The projector for candidates that are zero outside `rows` (one channel's observations),
+    /// given on those rows only: the same increments as the full candidate's, without the
+    /// zeros.
+    pub fn on_rows(&self, rows: &[usize]) -> Projector {
+        let pick = |v: &DVec| DVec::from_iterator(rows.len(), rows.iter().map(|&i| v[i]));
+        Projector {
+            q: select_rows(&self.q, rows),
+            w: pick(&self.w),
+            rw: pick(&self.rw),
+            // Qᵀr stays the whole residual's: it meets Qᵀc, which only the rows make.
+            qtr: self.qtr.clone(),
+        }
+    }
+
+    /// The columns of `c` that keep at least [`SEPARABILITY_TOLERANCE`] of their whitened norm
+    /// once the model and the columns kept before them are projected out: what a block of
+    /// columns adds to the model, by the rule the diagnosis applies to its base.
+    pub fn separable_columns(&self, c: &DMat) -> Vec<usize> {
+        let mut kept: Vec<DVec> = Vec::new();
+        let mut keep = Vec::new();
+        for (j, column) in c.column_iter().enumerate() {
+            let cw = column.component_mul(&self.w);
+            let norm = cw.norm();
+            if norm == 0.0 {
+                continue;
+            }
+            let mut r = cw / norm;
+            for _ in 0..2 {
+                if self.q.ncols() > 0 {
+                    r -= &self.q * self.q.tr_mul(&r);
+                }
+                for e in &kept {
+                    r.axpy(-e.dot(&r), e, 1.0);
+                }
+            }
+            let left = r.norm();
+            if left >= SEPARABILITY_TOLERANCE {
+                kept.push(r / left);
+                keep.push(j);
+            }
+        }
+        keep
+    }
+
     /// Whitened `c` with the current model projected out.
     pub fn residual_part(&self, c: &DMat) -> DMat {
         let mut cw = c.clone();
-        for (i, wi) in self.w.iter().enumerate() {
-            cw.row_mut(i).scale_mut(*wi);
+        for mut column in cw.column_iter_mut() {
+            column.component_mul_assign(&self.w);
         }
         if self.q.ncols() > 0 {
             let coef = tr_mul(&self.q, &cw);
@@ -404,15 +569,15 @@ impl Projector {
                 cw.columns_mut(at, c.ncols()).copy_from(c.as_ref());
                 at += c.ncols();
             }
-            for (i, wi) in self.w.iter().enumerate() {
-                cw.row_mut(i).scale_mut(*wi);
+            for mut column in cw.column_iter_mut() {
+                column.component_mul_assign(&self.w);
             }
             let a = (self.q.ncols() > 0).then(|| tr_mul(&self.q, &cw));
             let mut at = 0;
             for c in &batch {
                 let k = c.ncols();
-                let ak = a.as_ref().map(|a| a.columns(at, k).into_owned());
-                out.push(self.increment_of(&cw.columns(at, k).into_owned(), ak.as_ref()));
+                let ak = a.as_ref().map(|a| a.columns(at, k));
+                out.push(self.increment_of(cw.columns(at, k), ak));
                 at += k;
             }
         }
@@ -420,7 +585,7 @@ impl Projector {
     }
 
     /// The increment of whitened candidate columns `cw` with `a = Qᵀ cw` (`None`: no model).
-    fn increment_of(&self, cw: &DMat, a: Option<&DMat>) -> Increment {
+    fn increment_of(&self, cw: DMatView<'_>, a: Option<DMatView<'_>>) -> Increment {
         let k = cw.ncols();
         let none = Increment {
             delta_rss: 0.0,
@@ -434,10 +599,10 @@ impl Projector {
         if norms.iter().any(|n| n.is_nan() || *n <= 0.0) {
             return none;
         }
-        let mut g = cw.tr_mul(cw);
+        let mut g = cw.tr_mul(&cw);
         let mut b = cw.tr_mul(&self.rw);
         if let Some(a) = a {
-            g -= a.tr_mul(a);
+            g -= a.tr_mul(&a);
             b -= a.tr_mul(&self.qtr);
         }
         for i in 0..k {
@@ -480,25 +645,35 @@ const BATCH_VALUES: usize = 4_000_000;
 /// copies of `a` on a long record, and the work is faer's blocked QR and products, not an SVD
 /// of `a` (which costs many times more); a wide `a` from its SVD.
 pub(crate) fn orthonormal_basis(a: &DMat) -> DMat {
+    orthonormal_basis_and_map(a).0
+}
+
+/// [`orthonormal_basis`] `q` of `a` and the map `m` with `a · m = q` (p × rank): the
+/// coordinates in `q` of a least-squares fit give its minimum-norm coefficients through `m`.
+fn orthonormal_basis_and_map(a: &DMat) -> (DMat, DMat) {
     let (n, p) = a.shape();
     if p == 0 {
-        return DMat::zeros(n, 0);
+        return (DMat::zeros(n, 0), DMat::zeros(0, 0));
     }
     if n < p {
-        let svd = a.clone().svd(true, false);
+        let svd = a.clone().svd(true, true);
         let smax = svd.singular_values.max();
-        let u = svd.u.expect("requested");
+        let (u, vt) = (svd.u.expect("requested"), svd.v_t.expect("requested"));
         let keep: Vec<usize> = (0..svd.singular_values.len())
-            .filter(|&k| svd.singular_values[k] > 1e-9 * smax && smax > 0.0)
+            .filter(|&k| svd.singular_values[k] > RANK_TOLERANCE * smax && smax > 0.0)
             .collect();
-        return DMat::from_fn(n, keep.len(), |i, j| u[(i, keep[j])]);
+        let q = DMat::from_fn(n, keep.len(), |i, j| u[(i, keep[j])]);
+        let map = DMat::from_fn(p, keep.len(), |i, j| {
+            vt[(keep[j], i)] / svd.singular_values[keep[j]]
+        });
+        return (q, map);
     }
     let r = streamed_r(n, p, &|start, len| a.rows(start, len).into_owned());
     let svd = r.svd(false, true);
     let vt = svd.v_t.expect("requested");
     let smax = svd.singular_values.max();
     let keep: Vec<usize> = (0..svd.singular_values.len())
-        .filter(|&k| svd.singular_values[k] > 1e-9 * smax && smax > 0.0)
+        .filter(|&k| svd.singular_values[k] > RANK_TOLERANCE * smax && smax > 0.0)
         .collect();
     let k = keep.len();
     let map = DMat::from_fn(p, k, |i, j| vt[(keep[j], i)] / svd.singular_values[keep[j]]);
@@ -506,20 +681,19 @@ pub(crate) fn orthonormal_basis(a: &DMat) -> DMat {
     // A second pass removes the loss of orthogonality of the first (ε · condition number).
     let r2 = streamed_r(n, k, &|start, len| q1.rows(start, len).into_owned());
     let Some(inv) = r2.try_inverse().filter(|m| m.iter().all(|v| v.is_finite())) else {
-        return q1;
+        return (q1, map);
     };
-    // Q = Q₁ R₂⁻¹ row by row, in place.
+    // Q = Q₁ R₂⁻¹, a block of rows at a time in place (memory stays at Q₁).
     let mut q = q1;
-    let mut buffer = vec![0.0; k];
-    for i in 0..n {
-        for (j, b) in buffer.iter_mut().enumerate() {
-            *b = (0..=j).map(|l| q[(i, l)] * inv[(l, j)]).sum();
-        }
-        for (j, b) in buffer.iter().enumerate() {
-            q[(i, j)] = *b;
-        }
+    let mut start = 0;
+    while start < n {
+        let len = (n - start).min(4096);
+        let block = q.rows(start, len).into_owned();
+        q.rows_mut(start, len)
+            .copy_from(&product(as_faer(&block), as_faer(&inv)));
+        start += len;
     }
-    q
+    (q, &map * &inv)
 }
 
 #[cfg(test)]
@@ -563,6 +737,36 @@ mod tests {
         assert!((&g1 - &g2).norm() < 1e-12 * g1.norm());
         let (b1, b2) = (r1.tr_mul(&qty1), r2.tr_mul(&qty2));
         assert!((&b1 - &b2).norm() < 1e-12 * b1.norm());
+    }
+
+    #[test]
+    fn fold_fits_score_an_added_candidate_as_a_fresh_fit_does() {
+        let n = 400;
+        let (x, y, w) = problem(n);
+        // Observations whose acquisition order is their row order, one set-up.
+        let folds = Folds {
+            test: (0..5)
+                .map(|f| (0..n).filter(|i| (i / 20) % 5 == f).collect())
+                .collect(),
+            train: (0..5)
+                .map(|f| (0..n).filter(|i| (i / 20) % 5 != f).collect())
+                .collect(),
+        };
+        let base = x.columns(0, 3).into_owned();
+        let fits = FoldFits::new(&folds, &base, &y, &w);
+        let fresh = |x: &DMat| folds.rms(&folds.residuals(x, &y, &w));
+        assert!((fits.rms() - fresh(&base)).abs() < 1e-10 * fresh(&base));
+        // A new direction (the sine), and one already in the model (a combination of columns
+        // 1 and 2), which must change nothing.
+        for added in [x.columns(3, 1).into_owned(), x.columns(4, 1).into_owned()] {
+            let wide = DMat::from_fn(
+                n,
+                4,
+                |i, j| if j < 3 { base[(i, j)] } else { added[(i, 0)] },
+            );
+            let (a, b) = (fits.rms_with(&added), fresh(&wide));
+            assert!((a - b).abs() < 1e-9 * b, "{a} vs {b}");
+        }
     }
 
     #[test]

@@ -7,8 +7,9 @@ use mte_linalg::{DMat, DVec, stats};
 use serde::Serialize;
 
 use crate::basis::{legendre_columns, periods_to_scan, sin_cos_columns};
-use crate::data::{Observations, VariableKind};
+use crate::data::{Observations, Variable, VariableKind};
 use crate::fit::Projector;
+use rayon::prelude::*;
 
 /// One test of the residuals.
 #[derive(Debug, Clone, Serialize)]
@@ -64,20 +65,32 @@ pub(crate) fn structure_tests(
         None => (obs, &projector),
     };
     let n = obs.len();
-    let mut raw: Vec<(StructureTest, f64)> = Vec::new(); // (test, number of hypotheses inside it)
     let channels: Vec<usize> = (0..obs.channel_names.len()).collect();
-    let mut run = |variable: &str,
-                   channel: usize,
-                   test: &str,
-                   cols: DMat,
-                   period: Option<(f64, &str)>,
-                   inner: f64| {
-        let mask = DVec::from_fn(n, |i, _| if obs.channel[i] == channel { 1.0 } else { 0.0 });
-        let mut c = cols;
-        for (i, m) in mask.iter().enumerate() {
-            c.row_mut(i).scale_mut(*m);
-        }
-        let inc = projector.increment(&c);
+    // A test is of one channel: its columns are zero elsewhere, so it runs on that channel's rows.
+    let rows_of = |o: &Observations, ch: usize| -> Vec<usize> {
+        (0..o.len()).filter(|&i| o.channel[i] == ch).collect()
+    };
+    let rows: Vec<Vec<usize>> = channels.iter().map(|&ch| rows_of(obs, ch)).collect();
+    let projectors: Vec<Projector> = rows.iter().map(|r| projector.on_rows(r)).collect();
+    let scan_channels: Option<Vec<(Vec<usize>, Projector)>> = thin.as_ref().map(|_| {
+        channels
+            .iter()
+            .map(|&ch| {
+                let r = rows_of(scan_obs, ch);
+                let p = scan_projector.on_rows(&r);
+                (r, p)
+            })
+            .collect()
+    });
+    let run = |variable: &str,
+               channel: usize,
+               test: &str,
+               cols: DMat,
+               period: Option<(f64, &str)>,
+               inner: f64|
+     -> Option<(StructureTest, f64)> {
+        let c = crate::fit::select_rows(&cols, &rows[channel]);
+        let inc = projectors[channel].increment(&c);
         if inc.new_rank == 0 || dof <= inc.new_rank {
             return None;
         }
@@ -85,7 +98,7 @@ pub(crate) fn structure_tests(
         let d2 = (dof - inc.new_rank) as f64;
         let f = (inc.delta_rss / inc.new_rank as f64) / (rss_new / d2);
         let p = stats::f_sf(f, inc.new_rank as f64, d2);
-        raw.push((
+        Some((
             StructureTest {
                 variable: variable.to_string(),
                 channel: obs.channel_names[channel].clone(),
@@ -100,77 +113,95 @@ pub(crate) fn structure_tests(
                 }),
             },
             inner,
-        ));
-        Some(())
+        ))
     };
-    for &ch in &channels {
-        for v in &obs.variables {
-            match v.kind {
-                VariableKind::LinearAxis | VariableKind::RotaryAxis | VariableKind::Time => {
-                    run(
-                        &v.name,
-                        ch,
-                        "trend (cubic)",
-                        legendre_columns(&v.values, 1..=3),
-                        None,
-                        1.0,
-                    );
-                    if v.kind != VariableKind::Time {
-                        let rotary = v.kind == VariableKind::RotaryAxis;
-                        let scan_values = &scan_obs
-                            .variable(&v.name)
-                            .expect("the thinned observations have the same variables")
-                            .values;
-                        let periods = periods_to_scan(scan_values, rotary);
-                        let increments = scan_projector.increments(periods.len(), |k| {
-                            let mut c = sin_cos_columns(scan_values, periods[k]);
-                            for (i, &channel) in scan_obs.channel.iter().enumerate() {
-                                if channel != ch {
-                                    c.row_mut(i).fill(0.0);
-                                }
-                            }
-                            Cow::Owned(c)
-                        });
-                        let mut best: Option<(f64, f64)> = None;
-                        for (&p, inc) in periods.iter().zip(increments) {
-                            if best.is_none_or(|(_, d)| inc.delta_rss > d) {
-                                best = Some((p, inc.delta_rss));
-                            }
-                        }
-                        if let Some((p, _)) = best {
-                            run(
-                                &v.name,
-                                ch,
-                                "periodic",
-                                sin_cos_columns(&v.values, p),
-                                Some((p, if rotary { "°" } else { "mm" })),
-                                periods.len() as f64,
-                            );
-                        }
-                    }
-                }
-                VariableKind::Direction => {
-                    run(
-                        &v.name,
-                        ch,
-                        "direction",
-                        DMat::from_column_slice(n, 1, &v.values),
-                        None,
-                        1.0,
-                    );
-                }
-            }
-        }
-        if obs.setup_names.len() > 1 {
+    // The tests of one variable on one channel (`None`: of the set-up), independent of each
+    // other: run in parallel, collected in order (the same report for any thread count).
+    let tests_of = |ch: usize, variable: Option<&Variable>| -> Vec<(StructureTest, f64)> {
+        let Some(v) = variable else {
             let k = obs.setup_names.len();
             let cols = DMat::from_fn(
                 n,
                 k - 1,
                 |i, j| if obs.setup[i] == j + 1 { 1.0 } else { 0.0 },
             );
-            run("setup", ch, "setup", cols, None, 1.0);
+            return run("setup", ch, "setup", cols, None, 1.0)
+                .into_iter()
+                .collect();
+        };
+        let mut out = Vec::new();
+        match v.kind {
+            VariableKind::LinearAxis | VariableKind::RotaryAxis | VariableKind::Time => {
+                out.extend(run(
+                    &v.name,
+                    ch,
+                    "trend (cubic)",
+                    legendre_columns(&v.values, 1..=3),
+                    None,
+                    1.0,
+                ));
+                if v.kind != VariableKind::Time {
+                    let rotary = v.kind == VariableKind::RotaryAxis;
+                    let scan_values = &scan_obs
+                        .variable(&v.name)
+                        .expect("the thinned observations have the same variables")
+                        .values;
+                    let periods = periods_to_scan(scan_values, rotary);
+                    let (scan_rows, scan_projector) = match &scan_channels {
+                        Some(s) => (&s[ch].0, &s[ch].1),
+                        None => (&rows[ch], &projectors[ch]),
+                    };
+                    let on_channel: Vec<f64> = scan_rows.iter().map(|&i| scan_values[i]).collect();
+                    let increments = scan_projector.increments(periods.len(), |k| {
+                        Cow::Owned(sin_cos_columns(&on_channel, periods[k]))
+                    });
+                    let mut best: Option<(f64, f64)> = None;
+                    for (&p, inc) in periods.iter().zip(increments) {
+                        if best.is_none_or(|(_, d)| inc.delta_rss > d) {
+                            best = Some((p, inc.delta_rss));
+                        }
+                    }
+                    if let Some((p, _)) = best {
+                        out.extend(run(
+                            &v.name,
+                            ch,
+                            "periodic",
+                            sin_cos_columns(&v.values, p),
+                            Some((p, if rotary { "°" } else { "mm" })),
+                            periods.len() as f64,
+                        ));
+                    }
+                }
+            }
+            VariableKind::Direction => {
+                out.extend(run(
+                    &v.name,
+                    ch,
+                    "direction",
+                    DMat::from_column_slice(n, 1, &v.values),
+                    None,
+                    1.0,
+                ));
+            }
         }
-    }
+        out
+    };
+    let jobs: Vec<(usize, Option<&Variable>)> = channels
+        .iter()
+        .flat_map(|&ch| {
+            obs.variables
+                .iter()
+                .map(move |v| (ch, Some(v)))
+                .chain((obs.setup_names.len() > 1).then_some((ch, None)))
+        })
+        .collect();
+    let raw: Vec<(StructureTest, f64)> = jobs
+        .par_iter()
+        .map(|&(ch, v)| tests_of(ch, v))
+        .collect::<Vec<_>>()
+        .into_iter()
+        .flatten()
+        .collect();
     let total: f64 = raw.iter().map(|(_, inner)| inner).sum();
     raw.into_iter()
         .map(|(mut t, inner)| {
