@@ -425,6 +425,7 @@ pub(crate) fn max_abs(v: &DVec) -> f64 {
 
 /// An orthonormal basis of the whitened current model and its residuals, to project candidates
 /// against.
+#[derive(Clone)]
 pub(crate) struct Projector {
     q: DMat,
     w: DVec,

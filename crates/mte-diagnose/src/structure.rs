@@ -71,13 +71,21 @@ pub(crate) fn structure_tests(
         (0..o.len()).filter(|&i| o.channel[i] == ch).collect()
     };
     let rows: Vec<Vec<usize>> = channels.iter().map(|&ch| rows_of(obs, ch)).collect();
-    let projectors: Vec<Projector> = rows.iter().map(|r| projector.on_rows(r)).collect();
-    let scan_channels: Option<Vec<(Vec<usize>, Projector)>> = thin.as_ref().map(|_| {
+    // (One channel holds every row: the projector as it is, no copy of a long record's basis.)
+    fn on_rows<'p>(p: &'p Projector, r: &[usize], all: usize) -> Cow<'p, Projector> {
+        if r.len() == all {
+            Cow::Borrowed(p)
+        } else {
+            Cow::Owned(p.on_rows(r))
+        }
+    }
+    let projectors: Vec<Cow<Projector>> = rows.iter().map(|r| on_rows(&projector, r, n)).collect();
+    let scan_channels: Option<Vec<(Vec<usize>, Cow<Projector>)>> = thin.as_ref().map(|_| {
         channels
             .iter()
             .map(|&ch| {
                 let r = rows_of(scan_obs, ch);
-                let p = scan_projector.on_rows(&r);
+                let p = on_rows(scan_projector, &r, scan_obs.len());
                 (r, p)
             })
             .collect()
