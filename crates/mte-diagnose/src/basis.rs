@@ -60,7 +60,8 @@ fn sin_cos_turns(x: f64) -> (f64, f64) {
     let quarters = (4.0 * x).round();
     let phase = std::f64::consts::TAU * (x - 0.25 * quarters);
     let (s, c) = (phase.sin(), phase.cos());
-    match quarters.rem_euclid(4.0) as u8 {
+    // (An integer remainder: f64's `rem_euclid` is a slow software fmod.)
+    match (quarters as i64).rem_euclid(4) {
         0 => (s, c),
         1 => (c, -s),
         2 => (-s, -c),

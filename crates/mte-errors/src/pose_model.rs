@@ -329,6 +329,7 @@ impl Model for PoseErrorModel {
                     }
                 };
                 matmul(yt, accum, bridge::as_faer(&self.effect), xt, 1.0, Par::Seq);
+                bridge::clean_vector_state();
             }
             Linearisation::Exact => {
                 let mut e = vec![0.0; self.machine.n_slots()];

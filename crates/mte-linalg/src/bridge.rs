@@ -225,7 +225,24 @@ pub fn product(a: MatRef<'_, f64>, b: MatRef<'_, f64>) -> DMat {
         1.0,
         faer::Par::Seq,
     );
+    clean_vector_state();
     out
+}
+
+/// Leaves the vector registers as compiled code expects them after a faer kernel.
+///
+/// faer's matrix kernels (the `gemm` crate's AVX-512 micro-kernels) return with the upper halves
+/// of the vector registers dirty (no `vzeroupper`). Until something clears them, every
+/// SSE-encoded instruction that follows — the scalar floating-point code of this workspace,
+/// built for baseline x86-64 — pays a transition penalty: sin/cos loops ran 12× slower after
+/// one product on this project's machine (Xeon, AVX-512). [`product`] and the workspace's QR
+/// call this after faer returns; it issues `vzeroupper` through pulp's safe wrapper where the
+/// CPU has AVX, and does nothing elsewhere.
+pub fn clean_vector_state() {
+    #[cfg(target_arch = "x86_64")]
+    if let Some(avx) = pulp::core_arch::x86::Avx::try_new() {
+        avx._mm256_zeroupper();
+    }
 }
 
 #[cfg(test)]

@@ -30,7 +30,8 @@
 //! ```
 
 use crate::bridge::{
-    DMat, DVec, as_faer, as_faer_mut, faer_col_to_dvec, faer_to_dmat, vec_as_faer,
+    DMat, DVec, as_faer, as_faer_mut, clean_vector_state, faer_col_to_dvec, faer_to_dmat,
+    vec_as_faer,
 };
 use crate::error::{LinalgError, Result};
 use faer::Par;
@@ -203,10 +204,10 @@ impl Svd {
         let (m, n) = a.shape();
         let k = m.min(n);
         let f = as_faer(a);
-        let dec = if m >= n { f.thin_svd() } else { f.svd() }.map_err(|e| {
-            LinalgError::NoConvergence {
-                what: format!("SVD of a {m} × {n} matrix ({e:?})"),
-            }
+        let dec = if m >= n { f.thin_svd() } else { f.svd() };
+        clean_vector_state();
+        let dec = dec.map_err(|e| LinalgError::NoConvergence {
+            what: format!("SVD of a {m} × {n} matrix ({e:?})"),
         })?;
         let u = faer_to_dmat(dec.U().subcols(0, k));
         let v = faer_to_dmat(dec.V());
@@ -411,6 +412,7 @@ pub fn lstsq_qr(a: &DMat, b: &DVec) -> Result<DVec> {
         return Err(LinalgError::TooFewRows { rows: m, needed: n });
     }
     let qr = as_faer(a).qr();
+    clean_vector_state();
     let r = qr.thin_R();
     let diag_max = (0..n).map(|i| r.get(i, i).abs()).fold(0.0, f64::max);
     let tau = RankTolerance::Auto.threshold(m, n, diag_max);
@@ -423,6 +425,7 @@ pub fn lstsq_qr(a: &DMat, b: &DVec) -> Result<DVec> {
         }
     }
     let x = qr.solve_lstsq(vec_as_faer(b));
+    clean_vector_state();
     Ok(faer_col_to_dvec(x.as_ref()))
 }
 
@@ -460,6 +463,7 @@ pub fn qr_r(a: &DMat) -> DMat {
         MemStack::new(&mut MemBuffer::new(scratch)),
         Default::default(),
     );
+    clean_vector_state();
     DMat::from_fn(size, n, |i, j| if i <= j { qr[(i, j)] } else { 0.0 })
 }
 
@@ -940,11 +944,11 @@ impl Whitener {
                         }
                     }
                 }
-                let llt = as_faer(cov).llt(faer::Side::Lower).map_err(|e| {
-                    LinalgError::NotPositiveDefinite {
-                        what: "observation covariance".into(),
-                        detail: format!("Cholesky factorisation failed ({e:?})"),
-                    }
+                let llt = as_faer(cov).llt(faer::Side::Lower);
+                clean_vector_state();
+                let llt = llt.map_err(|e| LinalgError::NotPositiveDefinite {
+                    what: "observation covariance".into(),
+                    detail: format!("Cholesky factorisation failed ({e:?})"),
                 })?;
                 Ok(Whitener::Cholesky(llt.L().to_owned()))
             }
@@ -965,6 +969,7 @@ impl Whitener {
                 let mut out = a.clone();
                 l.as_ref()
                     .solve_lower_triangular_in_place(crate::bridge::as_faer_mut(&mut out));
+                clean_vector_state();
                 out
             }
         }

@@ -1104,6 +1104,7 @@ impl Path {
                         -1.0,
                         Par::Seq,
                     );
+                    mte_linalg::bridge::clean_vector_state();
                     for (r, d) in rc.iter_mut().zip(dt.iter()) {
                         *r += d;
                     }
@@ -1168,6 +1169,7 @@ impl Path {
                         Par::Seq,
                     );
                 }
+                mte_linalg::bridge::clean_vector_state();
                 self.un.iter_mut().for_each(|a| *a /= rkk);
             }
             // q_new is zero on the held-out rows, so Ψᵀq_new over all rows is Ψ_vᵀq_new
