@@ -743,10 +743,11 @@ pub struct StudyReport {
 }
 
 fn pct(k: usize, n: usize) -> String {
-    let p = 100.0 * k as f64 / n.max(1) as f64;
     if n == 0 {
-        "–".into()
-    } else if (k > 0 && p < 1.0) || (k < n && p > 99.0) {
+        return "–".into();
+    }
+    let p = 100.0 * k as f64 / n as f64;
+    if (k > 0 && p < 1.0) || (k < n && p > 99.0) {
         // Some but not all never reads as "0 %" or "100 %".
         format!("{p:.1} %")
     } else {

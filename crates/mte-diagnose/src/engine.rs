@@ -14,7 +14,7 @@ use crate::candidate::Candidate;
 use crate::data::Observations;
 use crate::fit::{
     FoldFits, Folds, Increment, Projector, SEPARABILITY_TOLERANCE, Solution, design, max_abs, rms,
-    solve, whitening,
+    separable_columns, solve, whitening,
 };
 use crate::structure::{StructureTest, structure_tests};
 use crate::term::{Estimate, Family, Quantity, Summary, Term};
@@ -1810,10 +1810,6 @@ fn complexity(t: &Term) -> (usize, usize) {
     (t.width(), shape)
 }
 
-/// The base terms the data can separate: columns are kept in order while each adds a direction
-/// (whitened, at least [`SEPARABILITY_TOLERANCE`] of its norm outside the kept ones); a term that
-/// loses some columns keeps the others. The dropped ones are reported with what they are
-/// confounded with.
 /// `t` with only its columns `keep` (itself when it keeps all); a term that lost some reports
 /// each coefficient.
 fn keep_columns(t: Term, keep: &[usize]) -> Term {
@@ -1830,33 +1826,17 @@ fn keep_columns(t: Term, keep: &[usize]) -> Term {
     }
 }
 
+/// The base terms the data can separate: columns are kept in order while each adds a direction
+/// (whitened, at least [`SEPARABILITY_TOLERANCE`] of its norm outside the kept ones); a term that
+/// loses some columns keeps the others. The dropped ones are reported with what they are
+/// confounded with.
 fn separable_base(base: Vec<Term>, w: &DVec) -> (Vec<Term>, Vec<NotSeparable>) {
     let mut basis: Vec<DVec> = Vec::new(); // orthonormal, whitened
     let mut kept: Vec<Term> = Vec::new();
     let mut dropped: Vec<(Term, usize)> = Vec::new(); // (term, column)
     for t in base {
-        let mut keep = Vec::new();
-        for j in 0..t.width() {
-            let c = t.columns.column(j).component_mul(w);
-            let norm = c.norm();
-            if norm == 0.0 {
-                continue;
-            }
-            let mut r = c / norm;
-            for _ in 0..2 {
-                for q in &basis {
-                    let d = q.dot(&r);
-                    r.axpy(-d, q, 1.0);
-                }
-            }
-            let left = r.norm();
-            if left >= SEPARABILITY_TOLERANCE {
-                basis.push(r / left);
-                keep.push(j);
-            } else {
-                dropped.push((t.clone(), j));
-            }
-        }
+        let (keep, not) = separable_columns(&t.columns, w, None, &mut basis);
+        dropped.extend(not.into_iter().map(|j| (t.clone(), j)));
         if !keep.is_empty() {
             kept.push(keep_columns(t, &keep));
         }

@@ -4,13 +4,14 @@
 use std::borrow::Cow;
 
 use mte_linalg::bridge::{as_faer, product};
+use mte_linalg::nalgebra::{DMatrixView, Dyn, SymmetricEigen};
 use mte_linalg::{DMat, DVec};
-
-/// A borrowed block of columns.
-type DMatView<'a> = mte_linalg::nalgebra::DMatrixView<'a, f64>;
 
 use crate::data::Observations;
 use crate::term::Term;
+
+/// A borrowed block of columns.
+type DMatView<'a> = DMatrixView<'a, f64>;
 
 /// Relative singular-value threshold below which a direction of the (column-normalised,
 /// whitened) design counts as undetermined.
@@ -120,15 +121,21 @@ pub(crate) fn solve(x: &DMat, y: &DVec, w: &DVec) -> Solution {
 /// The whitened, column-normalised design and observations as they are (fewer rows than
 /// columns: nothing to triangularise), with the column scale factors.
 fn whitened(x: &DMat, y: &DVec, w: &DVec) -> (DMat, DVec, DVec) {
-    let mut xw = x.clone();
-    for (i, wi) in w.iter().enumerate() {
-        xw.row_mut(i).scale_mut(*wi);
-    }
-    let scale = reciprocal_norms((0..xw.ncols()).map(|j| xw.column(j).norm()));
-    for (j, s) in scale.iter().enumerate() {
-        xw.column_mut(j).scale_mut(*s);
-    }
+    let (xw, scale) = whitened_columns(x.clone(), w);
     (xw, y.component_mul(w), scale)
+}
+
+/// `x` whitened (each row times its `w`) and its columns normalised, with the column scale
+/// factors.
+fn whitened_columns(mut x: DMat, w: &DVec) -> (DMat, DVec) {
+    for mut column in x.column_iter_mut() {
+        column.component_mul_assign(w);
+    }
+    let scale = reciprocal_norms(x.column_iter().map(|c| c.norm()));
+    for (mut column, s) in x.column_iter_mut().zip(scale.iter()) {
+        column.scale_mut(*s);
+    }
+    (x, scale)
 }
 
 /// The column scale factors of a design from its columns' norms (1 for a zero column).
@@ -213,7 +220,7 @@ pub(crate) fn select_rows(m: &DMat, rows: &[usize]) -> DMat {
     DMat::from_fn(rows.len(), m.ncols(), |i, j| m[(rows[i], j)])
 }
 
-fn select(v: &DVec, rows: &[usize]) -> DVec {
+pub(crate) fn select(v: &DVec, rows: &[usize]) -> DVec {
     DVec::from_iterator(rows.len(), rows.iter().map(|&i| v[i]))
 }
 
@@ -322,14 +329,7 @@ impl<'a> FoldFits<'a> {
             .iter()
             .map(|train| {
                 let wt = select(w, train);
-                let mut xw = select_rows(x, train);
-                for mut column in xw.column_iter_mut() {
-                    column.component_mul_assign(&wt);
-                }
-                let scale = reciprocal_norms(xw.column_iter().map(|c| c.norm()));
-                for (mut column, s) in xw.column_iter_mut().zip(scale.iter()) {
-                    column.scale_mut(*s);
-                }
+                let (xw, scale) = whitened_columns(select_rows(x, train), &wt);
                 let (q, map) = orthonormal_basis_and_map(&xw);
                 let map = DMat::from_fn(map.nrows(), map.ncols(), |i, j| map[(i, j)] * scale[i]);
                 let yw = select(y, train).component_mul(&wt);
@@ -370,28 +370,12 @@ impl<'a> FoldFits<'a> {
             let mut gamma = DVec::zeros(k);
             let mut coef_q = fit.qty.clone();
             if k > 0 {
-                let mut cw = select_rows(c, train);
-                let wt = select(self.w, train);
-                for mut column in cw.column_iter_mut() {
-                    column.component_mul_assign(&wt);
-                }
-                let norms = reciprocal_norms(cw.column_iter().map(|c| c.norm()));
-                for (mut column, s) in cw.column_iter_mut().zip(norms.iter()) {
-                    column.scale_mut(*s);
-                }
+                let (cw, norms) = whitened_columns(select_rows(c, train), &select(self.w, train));
                 let a = tr_mul(&fit.q, &cw);
                 let perp = &cw - &fit.q * &a;
-                let g = perp.tr_mul(&perp);
                 let b = perp.tr_mul(&fit.residuals);
-                let eig = g.symmetric_eigen();
-                let lambda_max = eig.eigenvalues.max().max(0.0);
-                for (i, &l) in eig.eigenvalues.iter().enumerate() {
-                    // The tolerance of [`Projector::increments`]: directions with less than 1e-6
-                    // of their norm left are rounding.
-                    if l > 1e-12 && l > 1e-12 * lambda_max {
-                        let v = eig.eigenvectors.column(i);
-                        gamma += v * (v.dot(&b) / l);
-                    }
+                for (l, v) in new_directions(&perp.tr_mul(&perp).symmetric_eigen()) {
+                    gamma += &v * (v.dot(&b) / l);
                 }
                 coef_q -= &a * &gamma;
                 gamma.component_mul_assign(&norms);
@@ -407,6 +391,43 @@ impl<'a> FoldFits<'a> {
         }
         self.folds.rms(&out)
     }
+}
+
+/// Splits the nonzero columns of `c` into those that keep at least [`SEPARABILITY_TOLERANCE`]
+/// of their whitened (by `w`) norm once the span of the orthonormal `q` and the directions in
+/// `kept` are projected out (twice, for rounding) — their directions are appended to `kept` —
+/// and those that do not: `(separable, not separable)` column indices.
+pub(crate) fn separable_columns(
+    c: &DMat,
+    w: &DVec,
+    q: Option<&DMat>,
+    kept: &mut Vec<DVec>,
+) -> (Vec<usize>, Vec<usize>) {
+    let (mut separable, mut not) = (Vec::new(), Vec::new());
+    for (j, column) in c.column_iter().enumerate() {
+        let cw = column.component_mul(w);
+        let norm = cw.norm();
+        if norm == 0.0 {
+            continue;
+        }
+        let mut r = cw / norm;
+        for _ in 0..2 {
+            if let Some(q) = q {
+                r -= q * q.tr_mul(&r);
+            }
+            for e in kept.iter() {
+                r.axpy(-e.dot(&r), e, 1.0);
+            }
+        }
+        let left = r.norm();
+        if left >= SEPARABILITY_TOLERANCE {
+            kept.push(r / left);
+            separable.push(j);
+        } else {
+            not.push(j);
+        }
+    }
+    (separable, not)
 }
 
 /// Root mean square of a vector.
@@ -473,48 +494,28 @@ impl Projector {
         }
     }
 
-    /// The projector for candidates that are zero outside `rows` (one channel's observations),
-    /// given on those rows only: the same increments as the full candidate's, without the
-    /// zeros.
-    pub fn on_rows(&self, rows: &[usize]) -> Projector {
-        let pick = |v: &DVec| DVec::from_iterator(rows.len(), rows.iter().map(|&i| v[i]));
-        Projector {
+    /// The projector for candidates that are zero outside `rows` (distinct, e.g. one channel's
+    /// observations), given on those rows only: the same increments as the full candidate's,
+    /// without the zeros. Every row: the projector itself (no copy of a long record's basis).
+    pub fn on_rows(&self, rows: &[usize]) -> Cow<'_, Projector> {
+        if rows.len() == self.w.len() {
+            return Cow::Borrowed(self);
+        }
+        Cow::Owned(Projector {
             q: select_rows(&self.q, rows),
-            w: pick(&self.w),
-            rw: pick(&self.rw),
+            w: select(&self.w, rows),
+            rw: select(&self.rw, rows),
             // Qᵀr stays the whole residual's: it meets Qᵀc, which only the rows make.
             qtr: self.qtr.clone(),
-        }
+        })
     }
 
     /// The columns of `c` that keep at least [`SEPARABILITY_TOLERANCE`] of their whitened norm
     /// once the model and the columns kept before them are projected out: what a block of
     /// columns adds to the model, by the rule the diagnosis applies to its base.
     pub fn separable_columns(&self, c: &DMat) -> Vec<usize> {
-        let mut kept: Vec<DVec> = Vec::new();
-        let mut keep = Vec::new();
-        for (j, column) in c.column_iter().enumerate() {
-            let cw = column.component_mul(&self.w);
-            let norm = cw.norm();
-            if norm == 0.0 {
-                continue;
-            }
-            let mut r = cw / norm;
-            for _ in 0..2 {
-                if self.q.ncols() > 0 {
-                    r -= &self.q * self.q.tr_mul(&r);
-                }
-                for e in &kept {
-                    r.axpy(-e.dot(&r), e, 1.0);
-                }
-            }
-            let left = r.norm();
-            if left >= SEPARABILITY_TOLERANCE {
-                kept.push(r / left);
-                keep.push(j);
-            }
-        }
-        keep
+        let q = (self.q.ncols() > 0).then_some(&self.q);
+        separable_columns(c, &self.w, q, &mut Vec::new()).0
     }
 
     /// Whitened `c` with the current model projected out.
@@ -613,24 +614,29 @@ impl Projector {
             }
         }
         let eig = g.symmetric_eigen();
-        let lambda_max = eig.eigenvalues.max().max(0.0);
         let lambda_min = eig.eigenvalues.min().max(0.0);
-        let mut delta_rss = 0.0;
-        let mut new_rank = 0;
-        for (i, &l) in eig.eigenvalues.iter().enumerate() {
-            // Directions with less than 1e-6 of their norm left are rounding (the Gram
-            // difference cancels to about 1e-16).
-            if l > 1e-12 && l > 1e-12 * lambda_max {
-                new_rank += 1;
-                delta_rss += eig.eigenvectors.column(i).dot(&b).powi(2) / l;
-            }
-        }
+        let directions = new_directions(&eig);
         Increment {
-            delta_rss,
-            new_rank,
+            delta_rss: directions
+                .iter()
+                .fold(0.0, |d, (l, v)| d + v.dot(&b).powi(2) / l),
+            new_rank: directions.len(),
             separability: lambda_min.sqrt(),
         }
     }
+}
+
+/// The eigenpairs `(λ, v)` of the normalised Gram matrix of a candidate's columns with the
+/// model projected out that are new directions: those with less than 1e-6 of their norm left
+/// are rounding (the Gram difference cancels to about 1e-16).
+fn new_directions(eig: &SymmetricEigen<f64, Dyn>) -> Vec<(f64, DVec)> {
+    let lambda_max = eig.eigenvalues.max().max(0.0);
+    eig.eigenvalues
+        .iter()
+        .enumerate()
+        .filter(|&(_, &l)| l > 1e-12 && l > 1e-12 * lambda_max)
+        .map(|(i, &l)| (l, eig.eigenvectors.column(i).into_owned()))
+        .collect()
 }
 
 /// Candidate columns per product with the model's basis in [`Projector::increments`]: wide

@@ -8,7 +8,7 @@ use serde::Serialize;
 
 use crate::basis::{legendre_columns, periods_to_scan, sin_cos_columns};
 use crate::data::{Observations, Variable, VariableKind};
-use crate::fit::Projector;
+use crate::fit::{Projector, select, select_rows};
 use rayon::prelude::*;
 
 /// One test of the residuals.
@@ -54,10 +54,9 @@ pub(crate) fn structure_tests(
     let projector = Projector::new(x, w, r);
     // Where the period scans run: all observations, or the thinned ones.
     let thin = scan_rows.map(|rows| {
-        let pick = |v: &DVec| DVec::from_iterator(rows.len(), rows.iter().map(|&i| v[i]));
         (
             obs.select(rows),
-            Projector::new(&crate::fit::select_rows(x, rows), &pick(w), &pick(r)),
+            Projector::new(&select_rows(x, rows), &select(w, rows), &select(r, rows)),
         )
     });
     let (scan_obs, scan_projector) = match &thin {
@@ -71,21 +70,13 @@ pub(crate) fn structure_tests(
         (0..o.len()).filter(|&i| o.channel[i] == ch).collect()
     };
     let rows: Vec<Vec<usize>> = channels.iter().map(|&ch| rows_of(obs, ch)).collect();
-    // (One channel holds every row: the projector as it is, no copy of a long record's basis.)
-    fn on_rows<'p>(p: &'p Projector, r: &[usize], all: usize) -> Cow<'p, Projector> {
-        if r.len() == all {
-            Cow::Borrowed(p)
-        } else {
-            Cow::Owned(p.on_rows(r))
-        }
-    }
-    let projectors: Vec<Cow<Projector>> = rows.iter().map(|r| on_rows(&projector, r, n)).collect();
+    let projectors: Vec<Cow<Projector>> = rows.iter().map(|r| projector.on_rows(r)).collect();
     let scan_channels: Option<Vec<(Vec<usize>, Cow<Projector>)>> = thin.as_ref().map(|_| {
         channels
             .iter()
             .map(|&ch| {
                 let r = rows_of(scan_obs, ch);
-                let p = on_rows(scan_projector, &r, scan_obs.len());
+                let p = scan_projector.on_rows(&r);
                 (r, p)
             })
             .collect()
@@ -97,7 +88,7 @@ pub(crate) fn structure_tests(
                period: Option<(f64, &str)>,
                inner: f64|
      -> Option<(StructureTest, f64)> {
-        let c = crate::fit::select_rows(&cols, &rows[channel]);
+        let c = select_rows(&cols, &rows[channel]);
         let inc = projectors[channel].increment(&c);
         if inc.new_rank == 0 || dof <= inc.new_rank {
             return None;

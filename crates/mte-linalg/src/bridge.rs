@@ -235,9 +235,10 @@ pub fn product(a: MatRef<'_, f64>, b: MatRef<'_, f64>) -> DMat {
 /// of the vector registers dirty (no `vzeroupper`). Until something clears them, every
 /// SSE-encoded instruction that follows — the scalar floating-point code of this workspace,
 /// built for baseline x86-64 — pays a transition penalty: sin/cos loops ran 12× slower after
-/// one product on this project's machine (Xeon, AVX-512). [`product`] and the workspace's QR
-/// call this after faer returns; it issues `vzeroupper` through pulp's safe wrapper where the
-/// CPU has AVX, and does nothing elsewhere.
+/// one product on this project's machine (Xeon, AVX-512). Every faer call of the workspace
+/// ([`product`], the QR, SVD and Cholesky routines of `lstsq`, the pose model, PCE) is followed
+/// by this; it issues `vzeroupper` through pulp's safe wrapper where the CPU has AVX, and does
+/// nothing elsewhere.
 pub fn clean_vector_state() {
     #[cfg(target_arch = "x86_64")]
     if let Some(avx) = pulp::core_arch::x86::Avx::try_new() {
