@@ -11,13 +11,29 @@ use xtask::reproduce::{self, Freshness, PAPERS};
 
 const USAGE: &str = "usage: cargo xtask <reproduce [seed000|seed002|seed003|seed004|all] [--check] | reproduce seed003 --timing | bench [-- criterion args] | bench-diagnose [--rows N] [--seed S] | study [fdr|power|coverage|openworld|all] [--n N] [--n-power M] [--seed S] [--kind axis|tracker|rtest|points] [--base-model omit] [--out FILE]>";
 
-/// `cargo xtask realistic <axis|tracker|rtest|points> <seed> <dir>`: writes one clean realistic
-/// dataset (every ordinary error, no hidden effect) for trying `mte diagnose` or timing it;
-/// `points` writes 3-D points of a C table with a calibrated target (the bundled
-/// `fixtures/datasets/c-stage-points/` is seed 1).
+/// `cargo xtask realistic <axis|tracker|rtest|points> <seed> <dir> [--hidden EFFECT SIZE]`:
+/// writes one realistic dataset (every ordinary error) for trying `mte diagnose` or timing it;
+/// clean unless `--hidden` names a study effect (`pitch`, `sawtooth`, `risefall`, … in the
+/// unit of the studies' tables; its other parameters drawn from the seed), whose truth is then
+/// printed — and written nowhere in the dataset. `points` writes 3-D points of a C table with a
+/// calibrated target (the bundled `fixtures/datasets/c-stage-points/` is seed 1).
 fn run_realistic(args: &[String]) -> Result<(), String> {
-    let [kind, seed, dir] = args else {
-        return Err("usage: cargo xtask realistic <axis|tracker|rtest|points> <seed> <dir>".into());
+    const USAGE: &str = "usage: cargo xtask realistic <axis|tracker|rtest|points> <seed> <dir> [--hidden EFFECT SIZE]";
+    let (args, hidden) = match args {
+        [a, b, c, flag, effect, size] if flag == "--hidden" => {
+            let e = xtask::studies::Effect::parse(effect).ok_or_else(|| {
+                format!(
+                    "--hidden `{effect}`: expected one of {:?}",
+                    xtask::studies::Effect::ALL
+                )
+            })?;
+            let size: f64 = size.parse().map_err(|e| format!("size `{size}`: {e}"))?;
+            (vec![a.clone(), b.clone(), c.clone()], Some((e, size)))
+        }
+        _ => (args.to_vec(), None),
+    };
+    let [kind, seed, dir] = args.as_slice() else {
+        return Err(USAGE.into());
     };
     if kind == "points" {
         let seed: u64 = seed.parse().map_err(|e| format!("seed `{seed}`: {e}"))?;
@@ -45,7 +61,18 @@ fn run_realistic(args: &[String]) -> Result<(), String> {
     let seed: u64 = seed.parse().map_err(|e| format!("seed `{seed}`: {e}"))?;
     let dir = std::path::Path::new(dir);
     std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
-    let truth = xtask::realistic::write(kind, &[], seed, dir).map_err(|e| e.to_string())?;
+    let hidden: Vec<_> = hidden
+        .map(|(e, size)| {
+            use rand::SeedableRng;
+            let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed ^ 0x5eed_5eed_5eed_5eed);
+            e.hidden(kind, size, &mut rng)
+        })
+        .into_iter()
+        .collect();
+    let truth = xtask::realistic::write(kind, &hidden, seed, dir).map_err(|e| e.to_string())?;
+    for h in &hidden {
+        println!("hidden: {h:?}");
+    }
     println!(
         "wrote {} ({} observations, noise {:.2} µm)",
         truth.manifest.display(),

@@ -310,6 +310,28 @@ pub enum Effect {
 }
 
 impl Effect {
+    /// Every effect, in declaration order.
+    pub const ALL: [Effect; 11] = [
+        Effect::Pitch,
+        Effect::Reversal,
+        Effect::ZeroDrift,
+        Effect::Squareness,
+        Effect::TrackerScale,
+        Effect::PivotDrift,
+        Effect::AngularPositioning,
+        Effect::BTilt,
+        Effect::Sawtooth,
+        Effect::RiseFall,
+        Effect::TwoAxis,
+    ];
+
+    /// The effect whose `Debug` name is `name` (case-insensitive), e.g. `sawtooth`.
+    pub fn parse(name: &str) -> Option<Effect> {
+        Effect::ALL
+            .into_iter()
+            .find(|e| format!("{e:?}").eq_ignore_ascii_case(name))
+    }
+
     /// Display name.
     pub fn name(self) -> &'static str {
         match self {

@@ -202,6 +202,35 @@ pub(crate) fn splitmix64(i: u64) -> u64 {
     z ^ (z >> 31)
 }
 
+/// The minimiser of `f` on `[a, b]` by `iterations` golden-section steps.
+pub(crate) fn golden_section(
+    mut a: f64,
+    mut b: f64,
+    iterations: usize,
+    f: impl Fn(f64) -> f64,
+) -> f64 {
+    let golden = 0.5 * (5f64.sqrt() - 1.0);
+    let mut c = b - golden * (b - a);
+    let mut d = a + golden * (b - a);
+    let (mut fc, mut fd) = (f(c), f(d));
+    for _ in 0..iterations {
+        if fc < fd {
+            b = d;
+            d = c;
+            fd = fc;
+            c = b - golden * (b - a);
+            fc = f(c);
+        } else {
+            a = c;
+            c = d;
+            fc = fd;
+            d = a + golden * (b - a);
+            fd = f(d);
+        }
+    }
+    0.5 * (a + b)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

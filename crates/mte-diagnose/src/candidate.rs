@@ -870,27 +870,7 @@ impl Candidate for Scan {
         let lo = self.grid[best.saturating_sub(1)];
         let hi = self.grid[(best + 1).min(self.grid.len() - 1)];
         let f = |p: f64| score(&self.term(p));
-        let golden = 0.5 * (5f64.sqrt() - 1.0);
-        let (mut a, mut b) = (lo, hi);
-        let mut c = b - golden * (b - a);
-        let mut d = a + golden * (b - a);
-        let (mut fc, mut fd) = (f(c), f(d));
-        for _ in 0..40 {
-            if fc < fd {
-                b = d;
-                d = c;
-                fd = fc;
-                c = b - golden * (b - a);
-                fc = f(c);
-            } else {
-                a = c;
-                c = d;
-                fc = fd;
-                d = a + golden * (b - a);
-                fd = f(d);
-            }
-        }
-        let p = 0.5 * (a + b);
+        let p = crate::basis::golden_section(lo, hi, 40, f);
         (f(p) < f(self.grid[best])).then(|| self.term(p))
     }
 

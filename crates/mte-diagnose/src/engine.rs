@@ -4,7 +4,7 @@
 //! not see.
 
 use std::borrow::Cow;
-use std::collections::HashMap;
+use std::collections::{BTreeMap, HashMap};
 
 use mte_linalg::{DMat, DVec, stats};
 use rayon::prelude::*;
@@ -645,10 +645,26 @@ pub fn diagnose(
             rows.len()
         ));
     }
-    let compound: Vec<Compound> = harmonic_families(&findings)
-        .into_iter()
-        .chain(compound_drifts(&findings))
-        .collect();
+    let mut compound: Vec<Compound> = harmonic_families(&findings);
+    if thinned.is_none() {
+        // (A long record samples densely: its harmonics show at their own periods.)
+        let covered: Vec<String> = compound.iter().flat_map(|c| c.findings.clone()).collect();
+        let s2 = (sol.rss_w / sol.dof().max(1) as f64).max(1e-300);
+        compound.extend(aliased_harmonic_families(
+            &searcher, &chosen, &terms, &w, s2, &covered,
+        ));
+    }
+    let drifts = compound_drifts(&findings);
+    let covered: Vec<String> = drifts.iter().flat_map(|c| c.findings.clone()).collect();
+    compound.extend(drifts);
+    compound.extend(drift_shapes(
+        obs,
+        &chosen,
+        &terms,
+        (&x, &w, &sol),
+        params.alpha,
+        &covered,
+    ));
     notes.extend(compound.iter().map(|c| c.note.clone()));
     notes.extend(ambiguity_notes);
     let residual_series = residual_series(
@@ -1432,6 +1448,192 @@ fn harmonic_families(findings: &[Finding]) -> Vec<Compound> {
     notes
 }
 
+/// Periodic components of one cause whose periods are no simple fractions of each other, yet
+/// may be a single periodic error that is not a sine: at irregular but coarse positions a
+/// sawtooth's harmonics show at alias periods, which [`harmonic_families`]'s ratio test cannot
+/// see. For each group of two or more periodic components of one candidate (not already in a
+/// family), the fundamental of a series of harmonics 1..K (K up to [`MAX_HARMONIC_ORDER`]) is
+/// scanned over the cause's periods and refined at the series' resolution; the group is said to
+/// be one non-sine error of that period when the series' Akaike criterion (χ² in units of the
+/// final model's σ0² plus twice its parameters: two per harmonic and the period) is no larger
+/// than the components' own (three each). Failing that, when two or more components are shorter
+/// than twice the mean step between the positions, the report says that these positions cannot
+/// tell one non-sine error from independent ones. The components stay as found.
+fn aliased_harmonic_families(
+    searcher: &Searcher<'_>,
+    chosen: &[Chosen],
+    terms: &[Term],
+    w: &DVec,
+    s2: f64,
+    covered: &[String],
+) -> Vec<Compound> {
+    let obs = searcher.obs;
+    let n = obs.len();
+    let base_len = terms.len() - chosen.len();
+    let mut groups: BTreeMap<usize, Vec<usize>> = BTreeMap::new();
+    for (k, c) in chosen.iter().enumerate() {
+        if matches!(c.term.family, Family::Periodic { .. }) && !covered.contains(&c.term.name) {
+            groups.entry(c.candidate).or_default().push(k);
+        }
+    }
+    let mut out = Vec::new();
+    for group in groups.values().filter(|g| g.len() >= 2) {
+        let rest: Vec<&Term> = terms
+            .iter()
+            .enumerate()
+            .filter(|(i, _)| *i < base_len || !group.contains(&(i - base_len)))
+            .map(|(_, t)| t)
+            .collect();
+        let x_rest = design(&rest, n);
+        let without = solve(&x_rest, &obs.values, w);
+        let projector = Projector::new(&x_rest, w, &without.residuals);
+        let members = group
+            .iter()
+            .map(|&k| chosen[k].term.columns.clone())
+            .reduce(|a, b| hcat(&a, &b))
+            .expect("two members");
+        let rss_found = without.rss_w - projector.increment(&members).delta_rss;
+        let aic_found = rss_found / s2 + 2.0 * (3 * group.len()) as f64;
+        // The fundamental: any period of the cause's scan (an alias of the true one is as good
+        // a start as the true one), refined at the series' own resolution.
+        let c = &chosen[group[0]];
+        let Some((_, span)) = period_and_span(obs, &c.term) else {
+            continue;
+        };
+        let candidate = searcher.chosen_candidate(c);
+        let grid: Vec<f64> = candidate
+            .variants(obs)
+            .into_iter()
+            .filter_map(|t| match t.family {
+                Family::Periodic { period } => Some(period),
+                _ => None,
+            })
+            .collect();
+        let series = |period: f64, harmonics: usize| -> Option<DMat> {
+            (1..=harmonics)
+                .map(|h| {
+                    candidate
+                        .at(c.variant, period / h as f64)
+                        .map(|t| t.columns)
+                })
+                .collect::<Option<Vec<DMat>>>()?
+                .into_iter()
+                .reduce(|a, b| hcat(&a, &b))
+        };
+        let profile = |periods: &[f64], harmonics: usize| -> Vec<f64> {
+            let columns: Vec<Option<DMat>> =
+                periods.iter().map(|&p| series(p, harmonics)).collect();
+            let empty = DMat::zeros(n, 0);
+            projector
+                .increments(periods.len(), |i| {
+                    Cow::Borrowed(columns[i].as_ref().unwrap_or(&empty))
+                })
+                .into_iter()
+                .zip(&columns)
+                .map(|(inc, c)| match c {
+                    Some(_) => without.rss_w - inc.delta_rss,
+                    None => f64::INFINITY,
+                })
+                .collect()
+        };
+        let argmin = |v: &[f64]| (0..v.len()).min_by(|&a, &b| v[a].total_cmp(&v[b]));
+        let mut best: Option<(f64, f64, usize)> = None; // (aic, period, K)
+        for harmonics in 2..=MAX_HARMONIC_ORDER as usize {
+            let coarse = profile(&grid, harmonics);
+            let Some(i) = argmin(&coarse) else {
+                continue;
+            };
+            // Between the best grid point's neighbours, a quarter of the series' resolution
+            // apart in frequency.
+            let (f_lo, f_hi) = (
+                1.0 / grid[(i + 1).min(grid.len() - 1)].max(grid[i.saturating_sub(1)]),
+                1.0 / grid[(i + 1).min(grid.len() - 1)].min(grid[i.saturating_sub(1)]),
+            );
+            let step = 1.0 / (4.0 * harmonics as f64 * span);
+            let steps = ((f_hi - f_lo) / step).ceil().max(1.0) as usize;
+            let fine: Vec<f64> = (0..=steps)
+                .map(|j| 1.0 / (f_lo + (f_hi - f_lo) * j as f64 / steps as f64))
+                .collect();
+            let scores = profile(&fine, harmonics);
+            let Some(j) = argmin(&scores) else {
+                continue;
+            };
+            let (a, b) = (fine[j.saturating_sub(1)], fine[(j + 1).min(fine.len() - 1)]);
+            let rss = |p: f64| profile(&[p], harmonics)[0];
+            let refined = crate::basis::golden_section(a.min(b), a.max(b), 30, rss);
+            let (period, r) = match rss(refined) {
+                r if r < scores[j] => (refined, r),
+                _ => (fine[j], scores[j]),
+            };
+            let aic = r / s2 + 2.0 * (2 * harmonics + 1) as f64;
+            if best.is_none_or(|b| aic < b.0) {
+                best = Some((aic, period, harmonics));
+            }
+        }
+        let names: Vec<String> = group.iter().map(|&k| chosen[k].term.name.clone()).collect();
+        let variable = obs.variable(c.term.exposed_by.as_deref().unwrap_or_default());
+        let quantity = if variable.is_some_and(|v| v.kind == crate::VariableKind::RotaryAxis) {
+            Quantity::AxisAngle
+        } else {
+            Quantity::Distance
+        };
+        let (scale, unit) = quantity.report_unit();
+        let shown = |v: f64| {
+            let d = crate::term::significant_decimals(v * scale / 100.0);
+            format!("{:.*} {unit}", d, v * scale)
+        };
+        let note = match best.filter(|b| b.0 <= aic_found) {
+            Some((aic, period, harmonics)) => format!(
+                "{} may be one periodic error of period {} that is not a sine (a sawtooth or sharp-profiled pitch error): the series of its harmonics 1–{harmonics} fits these data as well (Akaike criterion {aic:.1} against {aic_found:.1}), and at these positions its harmonics show at the periods found (aliases); positions at a finer or different spacing would tell the two readings apart",
+                names.join(", "),
+                shown(period)
+            ),
+            None => {
+                // Two or more components shorter than twice the mean step between the
+                // positions: a non-sine error's harmonics alias there, and a few sines at free
+                // periods fit almost any error at so few positions.
+                let Some(v) = variable else {
+                    continue;
+                };
+                let rows = |k: usize| {
+                    let t = &chosen[k].term.columns;
+                    (0..n).filter(move |&i| t.row(i).iter().any(|x| *x != 0.0))
+                };
+                let mut positions: Vec<f64> = group
+                    .iter()
+                    .flat_map(|&k| rows(k))
+                    .map(|i| v.values[i])
+                    .collect();
+                positions.sort_by(f64::total_cmp);
+                positions.dedup_by(|a, b| (*a - *b).abs() < 1e-9);
+                let step = (positions[positions.len() - 1] - positions[0])
+                    / (positions.len().max(2) - 1) as f64;
+                let short = group
+                    .iter()
+                    .filter(|&&k| {
+                        matches!(chosen[k].term.family, Family::Periodic { period } if period < 2.0 * step)
+                    })
+                    .count();
+                if short < 2 {
+                    continue;
+                }
+                format!(
+                    "{} may be one periodic error that is not a sine (a sawtooth, a stepped scale) seen through aliases, or independent periodic errors: at {} positions of {} a mean step of {} apart, periods below twice the step are aliases of each other and of a non-sine error's harmonics, and a few sines at free periods fit almost any error there; positions at a finer spacing would tell them apart",
+                    names.join(", "),
+                    positions.len(),
+                    v.name,
+                    shown(step)
+                )
+            }
+        };
+        out.push(Compound {
+            note,
+            findings: names,
+        });
+    }
+    out
+}
+
 /// Drifts of one parameter found in two forms (linear and first-order): together they describe
 /// a course neither has — a drift that rises and falls, or speeds up — over the measured time
 /// only, which the report says in one sentence.
@@ -1467,6 +1669,56 @@ fn compound_drifts(findings: &[Finding]) -> Vec<Compound> {
         }
     }
     out
+}
+
+/// Drifts found in one form (linear or first-order) whose course the data say is another: a
+/// smooth curve of the same parameter in time (its column times Legendre polynomials of degree
+/// 1–4 in t) still explains significantly more once the final model holds them (F test at
+/// `alpha`, Bonferroni over the drifts tested). Said in one sentence: the finding describes a
+/// drift of that parameter, not its course.
+fn drift_shapes(
+    obs: &Observations,
+    chosen: &[Chosen],
+    terms: &[Term],
+    (x, w, sol): (&DMat, &DVec, &Solution),
+    alpha: f64,
+    covered: &[String],
+) -> Vec<Compound> {
+    let Some(t) = obs.variable_of_kind(crate::data::VariableKind::Time) else {
+        return Vec::new();
+    };
+    let drifts: Vec<&Term> = chosen
+        .iter()
+        .map(|c| &c.term)
+        .filter(|t| matches!(t.family, Family::Drift { .. }) && !covered.contains(&t.name))
+        .collect();
+    if drifts.is_empty() {
+        return Vec::new();
+    }
+    let projector = Projector::new(x, w, &sol.residuals);
+    let curve = crate::basis::legendre_columns(&t.values, 1..=4);
+    drifts
+        .iter()
+        .filter_map(|d| {
+            let stem = d.name.split(" drift").next()?;
+            let constant = terms.iter().find(|t| t.name == stem)?.columns.column(0);
+            let mut cols = curve.clone();
+            for mut c in cols.column_iter_mut() {
+                c.component_mul_assign(&constant);
+            }
+            let inc = projector.increment(&cols);
+            let p = (f_test(sol.rss_w, inc.delta_rss, inc.new_rank, sol.dof()) * drifts.len() as f64)
+                .min(1.0);
+            (inc.new_rank > 0 && p < alpha).then(|| Compound {
+                note: format!(
+                    "{} describes a drift of {stem} whose course is neither linear nor a first-order settling (it may rise and fall): a smooth curve of {stem} in time explains significantly more ({}); the estimate holds over the measured time only",
+                    d.name,
+                    crate::report::p_text(p)
+                ),
+                findings: vec![d.name.clone()],
+            })
+        })
+        .collect()
 }
 
 /// The period or time constant of a term, with the quantity it is reported in (a period along a

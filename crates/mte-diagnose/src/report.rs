@@ -21,7 +21,7 @@ fn level(q: Quantity, v: f64) -> String {
 }
 
 /// A p-value as text: "p = 0.012", "p = 3.1e-5", "p < 1e-12".
-fn p_text(p: f64) -> String {
+pub(crate) fn p_text(p: f64) -> String {
     if p < 1e-12 {
         "p < 1e-12".into()
     } else if p < 1e-3 {
