@@ -11,30 +11,46 @@ use xtask::reproduce::{self, Freshness, PAPERS};
 
 const USAGE: &str = "usage: cargo xtask <reproduce [seed000|seed002|seed003|seed004|all] [--check] | reproduce seed003 --timing | bench [-- criterion args] | bench-diagnose [--rows N] [--seed S] | study [fdr|power|coverage|openworld|all] [--n N] [--n-power M] [--seed S] [--kind axis|tracker|rtest|points] [--base-model omit] [--out FILE]>";
 
-/// `cargo xtask realistic <axis|tracker|rtest|points> <seed> <dir> [--hidden EFFECT SIZE]`:
-/// writes one realistic dataset (every ordinary error) for trying `mte diagnose` or timing it;
-/// clean unless `--hidden` names a study effect (`pitch`, `sawtooth`, `risefall`, … in the
-/// unit of the studies' tables; its other parameters drawn from the seed), whose truth is then
-/// printed — and written nowhere in the dataset. `points` writes 3-D points of a C table with a
-/// calibrated target (the bundled `fixtures/datasets/c-stage-points/` is seed 1).
+/// `cargo xtask realistic <axis|tracker|rtest|points> <seed> <dir> [--hidden EFFECT SIZE]
+/// [--cycles N] [--targets N]`: writes one realistic dataset (every ordinary error) for trying
+/// `mte diagnose` or timing it; clean unless `--hidden` names a study effect (`pitch`,
+/// `sawtooth`, `risefall`, … in the unit of the studies' tables; its other parameters drawn
+/// from the seed), whose truth is then printed — and written nowhere in the dataset.
+/// `--cycles`: R-test measurement cycles; `--targets`: tracker targets (the benches' sizes:
+/// 8 cycles, 400 targets). `points` writes 3-D points of a C table with a calibrated target
+/// (the bundled `fixtures/datasets/c-stage-points/` is seed 1).
 fn run_realistic(args: &[String]) -> Result<(), String> {
-    const USAGE: &str = "usage: cargo xtask realistic <axis|tracker|rtest|points> <seed> <dir> [--hidden EFFECT SIZE]";
-    let (args, hidden) = match args {
-        [a, b, c, flag, effect, size] if flag == "--hidden" => {
-            let e = xtask::studies::Effect::parse(effect).ok_or_else(|| {
-                format!(
-                    "--hidden `{effect}`: expected one of {:?}",
-                    xtask::studies::Effect::ALL
-                )
-            })?;
-            let size: f64 = size.parse().map_err(|e| format!("size `{size}`: {e}"))?;
-            (vec![a.clone(), b.clone(), c.clone()], Some((e, size)))
-        }
-        _ => (args.to_vec(), None),
-    };
-    let [kind, seed, dir] = args.as_slice() else {
+    const USAGE: &str = "usage: cargo xtask realistic <axis|tracker|rtest|points> <seed> <dir> [--hidden EFFECT SIZE] [--cycles N] [--targets N]";
+    let (positional, options) = args.split_at(args.len().min(3));
+    let [kind, seed, dir] = positional else {
         return Err(USAGE.into());
     };
+    let count = |flag: &str, v: Option<&String>| -> Result<usize, String> {
+        let v = v.ok_or_else(|| format!("{flag}: expected a number\n{USAGE}"))?;
+        v.parse().map_err(|e| format!("{flag} `{v}`: {e}"))
+    };
+    let (mut hidden, mut cycles, mut targets) = (None, None, None);
+    let mut rest = options.iter();
+    while let Some(flag) = rest.next() {
+        match flag.as_str() {
+            "--hidden" => {
+                let (Some(effect), Some(size)) = (rest.next(), rest.next()) else {
+                    return Err(format!("--hidden: expected EFFECT SIZE\n{USAGE}"));
+                };
+                let e = xtask::studies::Effect::parse(effect).ok_or_else(|| {
+                    format!(
+                        "--hidden `{effect}`: expected one of {:?}",
+                        xtask::studies::Effect::ALL
+                    )
+                })?;
+                let size: f64 = size.parse().map_err(|e| format!("size `{size}`: {e}"))?;
+                hidden = Some((e, size));
+            }
+            "--cycles" => cycles = Some(count(flag, rest.next())?),
+            "--targets" => targets = Some(count(flag, rest.next())?),
+            other => return Err(format!("option `{other}`: unknown\n{USAGE}")),
+        }
+    }
     if kind == "points" {
         let seed: u64 = seed.parse().map_err(|e| format!("seed `{seed}`: {e}"))?;
         let truth =
@@ -69,7 +85,10 @@ fn run_realistic(args: &[String]) -> Result<(), String> {
         })
         .into_iter()
         .collect();
-    let truth = xtask::realistic::write(kind, &hidden, seed, dir).map_err(|e| e.to_string())?;
+    let mut spec = xtask::realistic::Spec::new(kind, &hidden);
+    spec.cycles = cycles;
+    spec.targets = targets;
+    let truth = xtask::realistic::write_spec(&spec, seed, dir).map_err(|e| e.to_string())?;
     for h in &hidden {
         println!("hidden: {h:?}");
     }

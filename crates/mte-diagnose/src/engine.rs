@@ -13,8 +13,8 @@ use serde::Serialize;
 use crate::candidate::Candidate;
 use crate::data::Observations;
 use crate::fit::{
-    FoldFits, Folds, Increment, Projector, SEPARABILITY_TOLERANCE, Solution, design, max_abs, rms,
-    separable_columns, solve, whitening,
+    Folds, Increment, Projector, SEPARABILITY_TOLERANCE, Solution, design, max_abs, rms,
+    separable_columns, solve, weighted_products, whitening,
 };
 use crate::structure::{StructureTest, structure_tests};
 use crate::term::{Estimate, Family, Quantity, Summary, Term};
@@ -47,7 +47,7 @@ pub struct DiagnoseParams {
     /// Most observations the search for causes runs on. A longer record (a continuous log) is
     /// searched on every k-th observation in acquisition order; the completed base and the
     /// causes found are then fitted to all observations, and the sizes, uncertainties, structure
-    /// tests and verdict come from all of them (the report says so). Default 20 000.
+    /// tests and verdict come from all of them (the report says so). Default 10 000.
     pub search_rows: usize,
 }
 
@@ -367,7 +367,7 @@ pub fn diagnose(
         None => (obs, &base[..], candidates),
     };
     let w_s = whitening(obs_s);
-    let pool = Pool::new(obs_s, candidates_s, base_s);
+    let pool = Pool::new(obs_s, candidates_s, base_s).with_products(base_s, &w_s);
     let searcher = Searcher {
         obs: obs_s,
         base: base_s,
@@ -382,12 +382,45 @@ pub fn diagnose(
         params.blocks_per_fold,
     );
     // The search on all data and the outer folds' searches are independent: run them together.
-    let (mut search, held_out) = rayon::join(
-        || searcher.search(&w_s, &folds_s, true),
+    // The conclusions from the search on all data (the final fits, tests and report) need not
+    // wait for the outer folds either.
+    let (concluded, held_out) = rayon::join(
+        || {
+            let search = searcher.search(&w_s, &folds_s, true);
+            conclude(
+                obs,
+                &base,
+                base_not_separable,
+                candidates,
+                params,
+                &w,
+                thinned.as_deref(),
+                search,
+            )
+        },
         || searcher.held_out(&w_s),
     );
-    drop(pool);
-    drop(thin);
+    let mut diagnosis = concluded?;
+    diagnosis.held_out = held_out;
+    Ok(diagnosis)
+}
+
+/// The diagnosis from the search on all data: the completed base and the causes found fitted
+/// to all observations (a long record is searched on the thinned rows `thinned`), pruned of
+/// causes the final fit does not determine, with their sizes, uncertainties, structure tests,
+/// notes and verdict. The held-out figures are the outer folds' ([`Searcher::held_out`]).
+#[allow(clippy::too_many_arguments)]
+fn conclude(
+    obs: &Observations,
+    base: &[Term],
+    base_not_separable: Vec<NotSeparable>,
+    candidates: &[Box<dyn Candidate>],
+    params: &DiagnoseParams,
+    w: &DVec,
+    thinned: Option<&[usize]>,
+    mut search: SearchResult,
+) -> Result<Diagnosis> {
+    let n = obs.len();
     if thinned.is_some() {
         // The terms found, on all observations (the thinned candidates are the full ones'
         // restrictions, in the same order).
@@ -405,7 +438,7 @@ pub fn diagnose(
     let no_pool = Pool::default();
     let searcher = Searcher {
         obs,
-        base: &base,
+        base,
         pool: &no_pool,
         candidates,
         params,
@@ -419,8 +452,9 @@ pub fn diagnose(
         ..searcher
     };
     let x0 = design(&base.iter().collect::<Vec<_>>(), n);
-    let base_sol = solve(&x0, &obs.values, &w);
-    let base_cv = folds.residuals(&x0, &obs.values, &w);
+    let base_sol = solve(&x0, &obs.values, w);
+    let base_fit = Projector::fit(&x0, &obs.values, w);
+    let base_cv = base_fit.fold_fits(&folds, &x0, &obs.values).residuals();
     let base_quality = quality(obs, &base_sol, &base_cv);
     let base_parameters = parameters(
         &base,
@@ -429,12 +463,13 @@ pub fn diagnose(
     );
     let structure = structure_tests(
         obs,
+        &base_fit,
         &x0,
         &base_sol.residuals,
-        &w,
+        w,
         base_sol.rss_w,
         base_sol.dof(),
-        thinned.as_deref(),
+        thinned,
     );
 
     // The final model. A cause whose size the data do not determine once the uncertainty of its
@@ -443,18 +478,17 @@ pub fn diagnose(
     let mut chosen = search.chosen;
     if thinned.is_some() {
         // Periods and time constants found on the thinned copy, refined on all observations.
-        gauss_newton_hyper(&searcher, &mut chosen, &w);
+        gauss_newton_hyper(&searcher, &mut chosen, w);
     }
     let mut pruned = search.pruned;
-    let (terms, x, sol, extended, scale, hyper_u, extended_parameters) = loop {
-        let mut terms: Vec<Term> = base.clone();
-        terms.extend(chosen.iter().map(|c| c.term.clone()));
-        let x = design(&terms.iter().collect::<Vec<_>>(), n);
-        let sol = solve(&x, &obs.values, &w);
-        let cv = folds.residuals(&x, &obs.values, &w);
+    let (terms, x, sol, fit, extended, scale, hyper_u, extended_parameters) = loop {
+        let (x, fit) = searcher.fit_of(&base_fit, &searcher.with(&chosen, None));
+        let terms = searcher.with(&chosen, None);
+        let sol = solve(&x, &obs.values, w);
+        let cv = fit.fold_fits(&folds, &x, &obs.values).residuals();
         let extended = quality(obs, &sol, &cv);
         let scale = covariance_scale(obs, extended.sigma0);
-        let (cov, hyper_u) = covariance_with_hyper(&searcher, &chosen, &x, &sol, &w);
+        let (cov, hyper_u) = covariance_with_hyper(&searcher, &chosen, &x, &sol, w);
         let extended_parameters = parameters(&terms, &sol.coef, &(cov * scale));
         let weakest = (0..chosen.len())
             .map(|k| {
@@ -468,11 +502,20 @@ pub fn diagnose(
             .filter(|(_, z)| *z < 2.0)
             .min_by(|a, b| a.1.total_cmp(&b.1));
         let Some((k, _)) = weakest else {
-            break (terms, x, sol, extended, scale, hyper_u, extended_parameters);
+            break (
+                terms,
+                x,
+                sol,
+                fit,
+                extended,
+                scale,
+                hyper_u,
+                extended_parameters,
+            );
         };
         pruned.extend(searcher.remove(&mut chosen, k));
     };
-    let finals = searcher.removal_p_values(&chosen, &w, &sol);
+    let finals = searcher.removal_p_values(&chosen, &base_fit, &fit);
     let rotary = |t: &Term| {
         t.exposed_by
             .as_deref()
@@ -522,7 +565,7 @@ pub fn diagnose(
             let width = c.term.width();
             let modes = period_modes(
                 obs,
-                &w,
+                w,
                 &x,
                 &sol,
                 col,
@@ -590,12 +633,13 @@ pub fn diagnose(
     }
     let remaining_structure: Vec<StructureTest> = structure_tests(
         obs,
+        &fit,
         &x,
         &sol.residuals,
-        &w,
+        w,
         sol.rss_w,
         sol.dof(),
-        thinned.as_deref(),
+        thinned,
     )
     .into_iter()
     .filter(|t| t.is_significant(params.alpha))
@@ -651,7 +695,7 @@ pub fn diagnose(
         let covered: Vec<String> = compound.iter().flat_map(|c| c.findings.clone()).collect();
         let s2 = (sol.rss_w / sol.dof().max(1) as f64).max(1e-300);
         compound.extend(aliased_harmonic_families(
-            &searcher, &chosen, &terms, &w, s2, &covered,
+            &searcher, &chosen, &terms, w, s2, &covered,
         ));
     }
     let drifts = compound_drifts(&findings);
@@ -661,7 +705,7 @@ pub fn diagnose(
         obs,
         &chosen,
         &terms,
-        (&x, &w, &sol),
+        (&x, w, &sol),
         params.alpha,
         &covered,
     ));
@@ -700,7 +744,7 @@ pub fn diagnose(
         extended,
         extended_parameters,
         remaining_structure,
-        held_out,
+        held_out: None,
         residual_series,
         alpha: params.alpha,
     })
@@ -763,6 +807,21 @@ struct Pool {
     source: Vec<usize>,
     /// Entry by the name of its first variant.
     by_name: HashMap<String, usize>,
+    /// Column of each variant in the variants' columns side by side (pool order).
+    offsets: Vec<Vec<usize>>,
+    /// The base design's products with every variant ([`Pool::with_products`]).
+    products: Option<BaseProducts>,
+}
+
+/// `Xᵀ W² C`: the base design `X` (weights `W`) against every variant's columns `C` side by
+/// side, formed once on all observations. A search scores a variant from these products and its
+/// model's basis ([`Projector::increment_from_products`]) instead of a pass over the
+/// observations per variant and step; an outer fold's search (weights zero on its held-out
+/// rows) subtracts those rows' share.
+struct BaseProducts {
+    x: DMat,
+    w: DVec,
+    a: DMat,
 }
 
 impl Pool {
@@ -793,11 +852,72 @@ impl Pool {
             .enumerate()
             .map(|(k, v)| (v[0].name.clone(), k))
             .collect();
+        let mut at = 0;
+        let offsets = variants
+            .iter()
+            .map(|v| {
+                v.iter()
+                    .map(|t| {
+                        at += t.width();
+                        at - t.width()
+                    })
+                    .collect()
+            })
+            .collect();
         Pool {
             variants,
             source,
             by_name,
+            offsets,
+            products: None,
         }
+    }
+
+    /// Every variant's columns, in pool order.
+    fn column_blocks(&self) -> Vec<&DMat> {
+        self.variants.iter().flatten().map(|t| &t.columns).collect()
+    }
+
+    /// The pool with the products of the design of `base` (weights `w`) with every variant.
+    fn with_products(mut self, base: &[Term], w: &DVec) -> Pool {
+        let x = design(&base.iter().collect::<Vec<_>>(), w.len());
+        let w2 = w.component_mul(w);
+        let a = weighted_products(&x, &w2, None, &self.column_blocks());
+        self.products = Some(BaseProducts { x, w: w.clone(), a });
+        self
+    }
+
+    /// The products of the model design `x` with every variant under weights `w`, given those
+    /// of its first columns `fixed` (rows of `Xᵀ W² C`, [`Pool::base_products`]); `None`
+    /// without products.
+    fn model_products(&self, fixed: Option<&DMat>, x: &DMat, w: &DVec) -> Option<DMat> {
+        let fixed = fixed?;
+        let p0 = fixed.nrows();
+        let extra = x.columns(p0, x.ncols() - p0).into_owned();
+        let e = weighted_products(&extra, &w.component_mul(w), None, &self.column_blocks());
+        let mut out = DMat::zeros(x.ncols(), fixed.ncols());
+        out.rows_mut(0, p0).copy_from(fixed);
+        out.rows_mut(p0, e.nrows()).copy_from(&e);
+        Some(out)
+    }
+
+    /// The products of the search base's design `x` (the pool's base first, then its
+    /// completions) with every variant under weights `w`: the pool's, less the share of the
+    /// rows whose weight differs (an outer fold's held-out rows), plus the completions' rows.
+    fn base_products(&self, x: &DMat, w: &DVec) -> Option<DMat> {
+        let bp = self.products.as_ref()?;
+        let p0 = bp.x.ncols();
+        if x.ncols() < p0 {
+            return None;
+        }
+        let blocks = self.column_blocks();
+        let differ: Vec<usize> = (0..w.len()).filter(|&i| w[i] != bp.w[i]).collect();
+        let mut base = bp.a.clone();
+        if !differ.is_empty() {
+            let dw2 = DVec::from_fn(w.len(), |i, _| bp.w[i] * bp.w[i] - w[i] * w[i]);
+            base -= weighted_products(&bp.x, &dw2, Some(&differ), &blocks);
+        }
+        self.model_products(Some(&base), x, w)
     }
 }
 
@@ -855,32 +975,33 @@ impl Searcher<'_> {
     /// take no part. `explain`: record which candidates the data cannot separate from the base
     /// (for the report; an outer fold's search only needs its causes).
     fn search(&self, w: &DVec, folds: &Folds, explain: bool) -> SearchResult {
-        let completed = self.complete(w);
+        let (completed, base_fit) = self.complete(w);
         let base: Vec<Term> = self.base.iter().chain(&completed).cloned().collect();
         let mut found = Searcher {
             base: &base,
             ..*self
         }
-        .search_causes(w, folds, explain);
+        .search_causes(w, folds, explain, &base_fit);
         found.completed = completed;
         found
     }
 
     /// The base's completion: higher orders of its component errors ([`Candidate::completes_base`]),
     /// one at a time, the most significant first, while one is significant at
-    /// [`COMPLETION_LEVEL`] (Bonferroni over those eligible).
-    fn complete(&self, w: &DVec) -> Vec<Term> {
+    /// [`COMPLETION_LEVEL`] (Bonferroni over those eligible). Returns the completions and the
+    /// fit of the completed base (its design: the base's, then the completions').
+    fn complete(&self, w: &DVec) -> (Vec<Term>, Projector) {
         let n = self.obs.len();
         let entries: Vec<usize> = (0..self.pool.variants.len())
             .filter(|&ci| self.candidate(ci).completes_base())
             .collect();
         let mut done: Vec<Term> = Vec::new();
         let mut used = vec![false; self.pool.variants.len()];
+        let base = design(&self.base.iter().collect::<Vec<_>>(), n);
+        let mut projector = Projector::fit(&base, &self.obs.values, w);
         loop {
             let terms: Vec<&Term> = self.base.iter().chain(&done).collect();
-            let x = design(&terms, n);
-            let sol = solve(&x, &self.obs.values, w);
-            let projector = Projector::new(&x, w, &sol.residuals);
+            let (rss, dof) = (projector.rss_w(), projector.dof());
             let eligible: Vec<usize> = entries
                 .iter()
                 .copied()
@@ -902,7 +1023,7 @@ impl Searcher<'_> {
                     used[ci] = true;
                     continue;
                 }
-                let p = f_test(sol.rss_w, inc.delta_rss, inc.new_rank, sol.dof());
+                let p = f_test(rss, inc.delta_rss, inc.new_rank, dof);
                 if best.is_none_or(|(_, bp)| p < bp) {
                     best = Some((ci, p));
                 }
@@ -914,17 +1035,26 @@ impl Searcher<'_> {
                     let t = &self.pool.variants[ci][0];
                     let keep = projector.separable_columns(&t.columns);
                     if !keep.is_empty() {
-                        done.push(keep_columns(t.clone(), &keep));
+                        let kept = keep_columns(t.clone(), &keep);
+                        projector = projector.extended(&kept.columns);
+                        done.push(kept);
                     }
                 }
                 _ => break,
             }
         }
-        done
+        (done, projector)
     }
 
     /// Forward search, then backward pruning.
-    fn search_causes(&self, w: &DVec, folds: &Folds, explain: bool) -> SearchResult {
+    /// `base_fit`: the fit of the base (this searcher's) under the weights `w`.
+    fn search_causes(
+        &self,
+        w: &DVec,
+        folds: &Folds,
+        explain: bool,
+        base_fit: &Projector,
+    ) -> SearchResult {
         let obs = self.obs;
         let params = self.params;
         let y = &obs.values;
@@ -949,13 +1079,23 @@ impl Searcher<'_> {
         };
         let mut terms = model_terms(&chosen);
         let mut x = design(&terms.iter().collect::<Vec<_>>(), obs.len());
-        let mut sol = solve(&x, y, w);
+        // The base's products with every variant, for this search's weights; the chosen terms'
+        // rows are added at each step.
+        let base_products = self.pool.base_products(&x, w);
+        // Variants whose columns a refinement changed (not the pool's: no products).
+        let mut refined: std::collections::HashSet<(usize, usize)> = Default::default();
 
         loop {
-            let projector = Projector::new(&x, w, &sol.residuals);
-            let fold_fits = FoldFits::new(folds, &x, y, w);
+            let p0 = base_fit.design_columns();
+            let projector = base_fit.extended(&x.columns(p0, x.ncols() - p0).into_owned());
+            let rss = projector.rss_w();
+            let products = self
+                .pool
+                .model_products(base_products.as_ref(), &x, w)
+                .map(|xp| projector.basis_products(&xp));
+            let fold_fits = projector.fold_fits(folds, &x, y);
             let cv_rms = fold_fits.rms();
-            let dof = sol.dof();
+            let dof = projector.dof();
             // A cause that builds on a term needs the term in the model: by name, or as a
             // combination of model terms (an absolute location error when the relative ones
             // are in the base).
@@ -977,7 +1117,8 @@ impl Searcher<'_> {
                 .iter()
                 .map(|&ci| self.pool.variants[ci].len())
                 .sum();
-            let mut scored: Vec<Scored> = Vec::new();
+            // Each candidate's best variant on the grid.
+            let mut graded: Vec<(usize, usize, Increment)> = Vec::new();
             for &ci in &eligible {
                 let mut best: Option<(usize, Increment)> = None;
                 let tried: Vec<(usize, &Term)> = (0..self.pool.variants[ci].len())
@@ -992,8 +1133,22 @@ impl Searcher<'_> {
                             || !near_a_component(obs, t, &chosen, self.pool.source[ci], None)
                     })
                     .collect();
-                let increments =
-                    projector.increments(tried.len(), |i| Cow::Borrowed(&tried[i].1.columns));
+                let increments: Vec<Increment> = match &products {
+                    Some(qc) => tried
+                        .iter()
+                        .map(|&(vi, t)| {
+                            if refined.contains(&(ci, vi)) {
+                                projector.increment(&t.columns)
+                            } else {
+                                let at = self.pool.offsets[ci][vi];
+                                projector.increment_given(&t.columns, qc.columns(at, t.width()))
+                            }
+                        })
+                        .collect(),
+                    None => {
+                        projector.increments(tried.len(), |i| Cow::Borrowed(&tried[i].1.columns))
+                    }
+                };
                 for (&(vi, t), inc) in tried.iter().zip(increments) {
                     if inc.separability < SEPARABILITY_TOLERANCE || inc.new_rank < t.width() {
                         continue;
@@ -1005,37 +1160,52 @@ impl Searcher<'_> {
                         best = Some((vi, inc));
                     }
                 }
-                let Some((vi, mut inc)) = best else {
+                let Some((vi, inc)) = best else {
                     if explain && steps.is_empty() {
                         record_not_separable(
                             &mut not_separable,
                             &self.pool.variants[ci][0],
                             &terms,
                             &x,
-                            w,
+                            &projector,
                         );
                     }
                     continue;
                 };
-                let k = inc.new_rank;
-                if dof <= k + 1 {
+                if dof <= inc.new_rank + 1 {
                     continue;
                 }
-                // Refining a period or time constant between its grid neighbours is worth it
-                // only where the grid's best comes near significance.
-                let p_grid = f_test(sol.rss_w, inc.delta_rss, k, dof) * variants_tested as f64;
-                let near = p_grid < REFINE_LEVEL * params.alpha;
-                let score = |t: &Term| sol.rss_w - projector.increment(&t.columns).delta_rss;
-                if let Some(refined) = near
-                    .then(|| self.candidate(ci).refine(vi, &score))
-                    .flatten()
-                {
-                    inc = projector.increment(&refined.columns);
-                    overrides.insert((ci, vi), nth_component(refined, times_chosen[ci]));
-                }
-                let p = f_test(sol.rss_w, inc.delta_rss, k, dof) * variants_tested as f64;
-                scored.push((ci, vi, p.min(1.0), inc.delta_rss / sol.rss_w.max(1e-300)));
+                graded.push((ci, vi, inc));
             }
+            // Refining a period or time constant between its grid neighbours is worth it only
+            // where the grid's best comes near significance, and only for the candidates that
+            // can reach the shortlist: the most significant on the grid (twice the shortlist).
+            let p_of = |inc: &Increment| {
+                (f_test(rss, inc.delta_rss, inc.new_rank, dof) * variants_tested as f64).min(1.0)
+            };
+            let mut order: Vec<usize> = (0..graded.len()).collect();
+            order.sort_by(|&a, &b| {
+                p_of(&graded[a].2)
+                    .total_cmp(&p_of(&graded[b].2))
+                    .then(graded[b].2.delta_rss.total_cmp(&graded[a].2.delta_rss))
+            });
+            for &g in order.iter().take(2 * params.shortlist) {
+                let (ci, vi, inc) = &mut graded[g];
+                if p_of(inc) >= REFINE_LEVEL * params.alpha {
+                    continue;
+                }
+                let score = |t: &Term| rss - projector.increment(&t.columns).delta_rss;
+                if let Some(better) = self.candidate(*ci).refine(*vi, &score) {
+                    *inc = projector.increment(&better.columns);
+                    overrides.insert((*ci, *vi), nth_component(better, times_chosen[*ci]));
+                    refined.insert((*ci, *vi));
+                }
+            }
+            let scored: Vec<Scored> = graded
+                .iter()
+                .map(|(ci, vi, inc)| (*ci, *vi, p_of(inc), inc.delta_rss / rss.max(1e-300)))
+                .collect();
+            let mut scored = scored;
             scored.sort_by(|a, b| a.2.total_cmp(&b.2).then(b.3.total_cmp(&a.3)));
             let mut ranking = Vec::new();
             let mut best: Option<(usize, usize, f64)> = None; // (entry, variant, cv rms)
@@ -1152,12 +1322,11 @@ impl Searcher<'_> {
             // Hyper-parameters found with the other effects still in the residuals are biased (an
             // undersampled pitch leaks into the long periods of an irregular grid): refine each
             // scanned term again with all the others fitted.
-            self.refit_scanned(&mut chosen, w);
+            self.refit_scanned(&mut chosen, base_fit);
             terms = model_terms(&chosen);
             x = design(&terms.iter().collect::<Vec<_>>(), obs.len());
-            sol = solve(&x, y, w);
         }
-        let pruned = self.prune(&mut chosen, w, folds);
+        let pruned = self.prune(&mut chosen, folds, base_fit);
         SearchResult {
             completed: Vec::new(),
             chosen,
@@ -1170,15 +1339,14 @@ impl Searcher<'_> {
 
     /// Refines the hyper-parameter of every chosen term with all other terms fitted; keeps a
     /// refinement only when it lowers the weighted residual sum of squares.
-    fn refit_scanned(&self, chosen: &mut [Chosen], w: &DVec) {
-        let n = self.obs.len();
+    fn refit_scanned(&self, chosen: &mut [Chosen], base_fit: &Projector) {
         for j in 0..chosen.len() {
-            // The model without term j, factorised once (when the candidate refines at all): a
-            // trial term's RSS is that model's minus the trial's increment.
+            // The model without term j, fitted once (when the candidate refines at all): a trial
+            // term's RSS is that model's minus the trial's increment.
             let others = std::cell::OnceCell::new();
             let rss_with = |t: &Term| {
                 let (rss, projector) = others.get_or_init(|| {
-                    let terms: Vec<&Term> = self
+                    let terms: Vec<Term> = self
                         .base
                         .iter()
                         .chain(
@@ -1188,10 +1356,10 @@ impl Searcher<'_> {
                                 .filter(|(k, _)| *k != j)
                                 .map(|(_, c)| &c.term),
                         )
+                        .cloned()
                         .collect();
-                    let x = design(&terms, n);
-                    let sol = solve(&x, &self.obs.values, w);
-                    (sol.rss_w, Projector::new(&x, w, &sol.residuals))
+                    let projector = self.fit_of(base_fit, &terms).1;
+                    (projector.rss_w(), projector)
                 });
                 rss - projector.increment(&t.columns).delta_rss
             };
@@ -1213,19 +1381,16 @@ impl Searcher<'_> {
     /// Backward pruning: every cause is re-tested in the complete model (F test of removing it,
     /// Bonferroni-adjusted as when it entered, and its cross-validated gain); the weakest that
     /// fails leaves, with the causes that build on it, until all pass. Returns the names removed.
-    fn prune(&self, chosen: &mut Vec<Chosen>, w: &DVec, folds: &Folds) -> Vec<String> {
-        let n = self.obs.len();
+    fn prune(&self, chosen: &mut Vec<Chosen>, folds: &Folds, base_fit: &Projector) -> Vec<String> {
         let y = &self.obs.values;
         let mut pruned = Vec::new();
         while !chosen.is_empty() {
-            let full = self.with(chosen, None);
-            let x = design(&full.iter().collect::<Vec<_>>(), n);
-            let sol = solve(&x, y, w);
-            let cv_full = folds.rms(&folds.residuals(&x, y, w));
+            let (x, fit) = self.fit_of(base_fit, &self.with(chosen, None));
+            let cv_full = fit.fold_fits(folds, &x, y).rms();
             let mut weakest: Option<(usize, f64, f64)> = None; // (index, p, cv ratio)
             for j in 0..chosen.len() {
-                let (xr, p) = self.removal_test(chosen, j, w, &sol);
-                let ratio = folds.rms(&folds.residuals(&xr, y, w)) / cv_full.max(1e-300);
+                let (xr, reduced, p) = self.removal_test(chosen, j, base_fit, &fit);
+                let ratio = reduced.fold_fits(folds, &xr, y).rms() / cv_full.max(1e-300);
                 let fails = p >= self.params.alpha || ratio < 1.0 + 0.5 * self.params.min_gain;
                 if fails && weakest.is_none_or(|(_, bp, br)| p > bp || (p == bp && ratio < br)) {
                     weakest = Some((j, p, ratio));
@@ -1235,6 +1400,14 @@ impl Searcher<'_> {
             pruned.extend(self.remove(chosen, j));
         }
         pruned
+    }
+
+    /// The design of `terms` (the base's, then others) and its fit, from the base's fit.
+    fn fit_of(&self, base_fit: &Projector, terms: &[Term]) -> (DMat, Projector) {
+        let x = design(&terms.iter().collect::<Vec<_>>(), self.obs.len());
+        let p0 = base_fit.design_columns();
+        let fit = base_fit.extended(&x.columns(p0, x.ncols() - p0).into_owned());
+        (x, fit)
     }
 
     /// Removes chosen term `j` and what builds on it; returns their names, `j`'s first.
@@ -1251,17 +1424,21 @@ impl Searcher<'_> {
         removed
     }
 
-    /// The model without chosen term `j` (and what builds on it): its design, and the
-    /// Bonferroni-adjusted p-value of the removal against the complete model's solution `sol`.
-    fn removal_test(&self, chosen: &[Chosen], j: usize, w: &DVec, sol: &Solution) -> (DMat, f64) {
-        let reduced = self.with(chosen, Some(j));
-        let xr = design(&reduced.iter().collect::<Vec<_>>(), self.obs.len());
-        let sr = solve(&xr, &self.obs.values, w);
-        let k = sol.rank.saturating_sub(sr.rank).max(1);
-        let p = (f_test(sr.rss_w, sr.rss_w - sol.rss_w, k, sol.dof())
+    /// The model without chosen term `j` (and what builds on it): its design and fit, and the
+    /// Bonferroni-adjusted p-value of the removal against the complete model's fit `full`.
+    fn removal_test(
+        &self,
+        chosen: &[Chosen],
+        j: usize,
+        base_fit: &Projector,
+        full: &Projector,
+    ) -> (DMat, Projector, f64) {
+        let (xr, fit) = self.fit_of(base_fit, &self.with(chosen, Some(j)));
+        let k = full.rank().saturating_sub(fit.rank()).max(1);
+        let p = (f_test(fit.rss_w(), fit.rss_w() - full.rss_w(), k, full.dof())
             * chosen[j].variants_tested as f64)
             .min(1.0);
-        (xr, p)
+        (xr, fit, p)
     }
 
     /// Base terms and chosen terms, without the chosen term `skip` and those that build on it.
@@ -1279,10 +1456,16 @@ impl Searcher<'_> {
         t
     }
 
-    /// Adjusted p-value of removing each chosen term from the complete model (solution `sol`).
-    fn removal_p_values(&self, chosen: &[Chosen], w: &DVec, sol: &Solution) -> Vec<f64> {
+    /// Adjusted p-value of removing each chosen term from the complete model (fit `full`;
+    /// `base_fit`: the base's).
+    fn removal_p_values(
+        &self,
+        chosen: &[Chosen],
+        base_fit: &Projector,
+        full: &Projector,
+    ) -> Vec<f64> {
         (0..chosen.len())
-            .map(|j| self.removal_test(chosen, j, w, sol).1)
+            .map(|j| self.removal_test(chosen, j, base_fit, full).2)
             .collect()
     }
 
@@ -2093,16 +2276,19 @@ fn separable_base(base: Vec<Term>, w: &DVec) -> (Vec<Term>, Vec<NotSeparable>) {
             kept.push(keep_columns(t, &keep));
         }
     }
+    let x = design(&kept.iter().collect::<Vec<_>>(), w.len());
+    let fit = (!dropped.is_empty()).then(|| Projector::new(&x, w, &DVec::zeros(w.len())));
     let not_separable = dropped
         .into_iter()
         .map(|(t, j)| {
-            let x = design(&kept.iter().collect::<Vec<_>>(), t.columns.nrows());
             let column = Term {
                 columns: t.columns.columns(j, 1).into_owned(),
                 ..t.clone()
             };
             let mut out = Vec::new();
-            record_not_separable(&mut out, &column, &kept, &x, w);
+            if let Some(fit) = &fit {
+                record_not_separable(&mut out, &column, &kept, &x, fit);
+            }
             let mut ns = out.pop().unwrap_or(NotSeparable {
                 name: String::new(),
                 label: t.label.clone(),
@@ -2166,7 +2352,13 @@ fn parameters(terms: &[Term], coef: &DVec, cov: &DMat) -> Vec<ParameterEstimate>
         .collect()
 }
 
-fn record_not_separable(out: &mut Vec<NotSeparable>, t: &Term, model: &[Term], x: &DMat, w: &DVec) {
+fn record_not_separable(
+    out: &mut Vec<NotSeparable>,
+    t: &Term,
+    model: &[Term],
+    x: &DMat,
+    fit: &Projector,
+) {
     if matches!(
         t.family,
         Family::Setup | Family::Drift { .. } | Family::Component { .. }
@@ -2177,14 +2369,14 @@ fn record_not_separable(out: &mut Vec<NotSeparable>, t: &Term, model: &[Term], x
         return;
     }
     // Which model terms the candidate is made of: regress it on the model's columns.
-    let sol = solve(x, &t.columns.column(0).into_owned(), w);
+    let coef = fit.coefficients(&t.columns.column(0).into_owned());
     let mut contributions: Vec<(String, f64)> = Vec::new();
     let mut c = 0;
     for m in model {
         let k = m.width();
         let mut share = 0.0;
         for j in c..c + k {
-            share += (x.column(j) * sol.coef[j]).norm();
+            share += (x.column(j) * coef[j]).norm();
         }
         contributions.push((m.name.clone(), share));
         c += k;

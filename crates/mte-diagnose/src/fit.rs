@@ -230,12 +230,13 @@ pub(crate) fn select(v: &DVec, rows: &[usize]) -> DVec {
 #[derive(Debug, Clone)]
 pub(crate) struct Folds {
     pub test: Vec<Vec<usize>>,
-    pub train: Vec<Vec<usize>>,
 }
 
 impl Folds {
     /// `k` folds of blocks of about `n / (k · blocks_per_fold)` of the observations marked in
-    /// `include`; the others take part in no fold.
+    /// `include`; the others take part in no fold. A fold's training rows are every
+    /// observation of nonzero weight outside it: the fits give the observations outside
+    /// `include` zero weight.
     pub fn blocked(
         obs: &Observations,
         include: &[bool],
@@ -257,17 +258,7 @@ impl Folds {
             let block = pos * n_blocks / n;
             test[(block + obs.setup[i]) % k].push(i);
         }
-        let train = test
-            .iter()
-            .map(|t| {
-                let mut held = vec![false; include.len()];
-                t.iter().for_each(|&i| held[i] = true);
-                (0..include.len())
-                    .filter(|&i| include[i] && !held[i])
-                    .collect()
-            })
-            .collect();
-        Folds { test, train }
+        Folds { test }
     }
 
     /// RMS of out-of-fold residuals over the observations the folds hold out.
@@ -283,63 +274,87 @@ impl Folds {
             (sum / count as f64).sqrt()
         }
     }
-
-    /// Out-of-fold prediction residuals (mm) of the model with design `x`, one per observation
-    /// (zero for observations in no fold).
-    pub fn residuals(&self, x: &DMat, y: &DVec, w: &DVec) -> DVec {
-        let mut out = DVec::zeros(y.len());
-        for (train, test) in self.train.iter().zip(&self.test) {
-            let sol = solve(&select_rows(x, train), &select(y, train), &select(w, train));
-            for &i in test {
-                out[i] = y[i] - x.row(i).dot(&sol.coef.transpose());
-            }
-        }
-        out
-    }
 }
 
-/// The folds' fits of one model, kept to score candidates added to it: per fold an orthonormal
-/// basis of the whitened, column-normalised training design (the directions [`solve`] keeps,
-/// same tolerance) and the map from it to the coefficients. A candidate's out-of-fold residuals
-/// then cost products with the basis, not a fresh factorisation per fold.
+/// The folds' fits of one model, kept to score candidates added to it. One orthonormal basis
+/// `Q` of the whitened, column-normalised design on all observations serves every fold: a
+/// fold's training fit has coordinates `a = M⁺ (Qᵀy − Q_Tᵀ y_T)` in it, `M = I − Q_TᵀQ_T` the
+/// training rows' Gram (`T` the fold's test rows, whitened `y`), so a fold costs `|T| · rank²`
+/// instead of a factorisation of its training design; directions the training rows do not
+/// determine (an eigenvalue of `M` below [`FOLD_TOLERANCE`]) get the minimum-norm solution, as
+/// in [`solve`]. A candidate's out-of-fold residuals then cost its projection on the basis and
+/// a small block elimination per fold.
 pub(crate) struct FoldFits<'a> {
     folds: &'a Folds,
     x: &'a DMat,
     y: &'a DVec,
     w: &'a DVec,
+    /// Orthonormal basis of the whitened design (n × rank) and the map with `(W X) map = q`.
+    q: Cow<'a, DMat>,
+    map: Cow<'a, DMat>,
     fits: Vec<FoldFit>,
 }
 
 struct FoldFit {
-    /// Orthonormal basis of the whitened training design (training rows × rank).
-    q: DMat,
-    /// Coefficients from basis coordinates: `x_train · diag(w) · map = q`.
-    map: DMat,
-    /// `qᵀ · (whitened training observations)`.
-    qty: DVec,
-    /// Whitened training residuals of the model.
-    residuals: DVec,
+    /// The basis on the fold's test rows, `Q_T`.
+    qt: DMat,
+    /// `M⁺`, `M = I − Q_TᵀQ_T`.
+    m_pinv: DMat,
+    /// `Qᵀ W y − Q_Tᵀ (W y)_T`: the training rows' share of `Qᵀ W y`.
+    g: DVec,
+}
+
+/// Eigenvalue of a fold's training Gram `M` (in units of the whole data's, which is 1) below
+/// which its direction counts as undetermined by the training rows.
+const FOLD_TOLERANCE: f64 = 1e-10;
+
+/// `M⁺` of a symmetric positive semi-definite `m`, dropping eigenvalues below
+/// [`FOLD_TOLERANCE`] × its largest (and never above 1).
+fn pinv_psd(m: DMat) -> DMat {
+    let k = m.nrows();
+    if k == 0 {
+        return m;
+    }
+    let eig = m.symmetric_eigen();
+    let top = eig.eigenvalues.max().max(1.0);
+    // V diag(1/λ) Vᵀ over the kept eigenvalues, as one product.
+    let mut scaled = eig.eigenvectors.clone();
+    for (mut column, l) in scaled.column_iter_mut().zip(eig.eigenvalues.iter()) {
+        let f = if *l > FOLD_TOLERANCE * top {
+            1.0 / l
+        } else {
+            0.0
+        };
+        column.scale_mut(f);
+    }
+    product(as_faer(&scaled), as_faer(&eig.eigenvectors).transpose())
 }
 
 impl<'a> FoldFits<'a> {
-    /// Fits the model with design `x` on every fold's training rows.
-    pub fn new(folds: &'a Folds, x: &'a DMat, y: &'a DVec, w: &'a DVec) -> FoldFits<'a> {
+    /// The folds' fits of the model with design `x` from the basis `q` of its whitened design
+    /// and the map with `(W X) map = q` ([`Projector::fold_fits`]).
+    fn with_basis(
+        folds: &'a Folds,
+        x: &'a DMat,
+        y: &'a DVec,
+        w: &'a DVec,
+        q: Cow<'a, DMat>,
+        map: Cow<'a, DMat>,
+    ) -> FoldFits<'a> {
+        let yw = y.component_mul(w);
+        let qty = q.tr_mul(&yw);
+        let r = q.ncols();
         let fits = folds
-            .train
+            .test
             .iter()
-            .map(|train| {
-                let wt = select(w, train);
-                let (xw, scale) = whitened_columns(select_rows(x, train), &wt);
-                let (q, map) = orthonormal_basis_and_map(&xw);
-                let map = DMat::from_fn(map.nrows(), map.ncols(), |i, j| map[(i, j)] * scale[i]);
-                let yw = select(y, train).component_mul(&wt);
-                let qty = q.tr_mul(&yw);
-                let residuals = &yw - &q * &qty;
+            .map(|test| {
+                let qt = select_rows(&q, test);
+                let m = DMat::identity(r, r) - tr_mul(&qt, &qt);
+                let g = &qty - qt.tr_mul(&select(&yw, test));
                 FoldFit {
-                    q,
-                    map,
-                    qty,
-                    residuals,
+                    qt,
+                    m_pinv: pinv_psd(m),
+                    g,
                 }
             })
             .collect();
@@ -348,39 +363,71 @@ impl<'a> FoldFits<'a> {
             x,
             y,
             w,
+            q,
+            map,
             fits,
         }
     }
 
+    /// Out-of-fold residuals of the model (mm), one per observation (zero for observations in
+    /// no fold).
+    pub fn residuals(&self) -> DVec {
+        self.residuals_with(&DMat::zeros(self.x.nrows(), 0))
+    }
+
     /// RMS of the out-of-fold residuals of the model.
     pub fn rms(&self) -> f64 {
-        self.rms_with(&DMat::zeros(self.x.nrows(), 0))
+        self.folds
+            .rms(&self.residuals_with(&DMat::zeros(self.x.nrows(), 0)))
     }
 
     /// RMS of the out-of-fold residuals of the model with the columns `c` added (the same as
     /// [`Folds::residuals`] of the wider design, up to rounding).
     pub fn rms_with(&self, c: &DMat) -> f64 {
-        let mut out = DVec::zeros(self.y.len());
-        for (fit, (train, test)) in self
-            .fits
-            .iter()
-            .zip(self.folds.train.iter().zip(&self.folds.test))
-        {
-            let k = c.ncols();
-            let mut gamma = DVec::zeros(k);
-            let mut coef_q = fit.qty.clone();
-            if k > 0 {
-                let (cw, norms) = whitened_columns(select_rows(c, train), &select(self.w, train));
-                let a = tr_mul(&fit.q, &cw);
-                let perp = &cw - &fit.q * &a;
-                let b = perp.tr_mul(&fit.residuals);
-                for (l, v) in new_directions(&perp.tr_mul(&perp).symmetric_eigen()) {
-                    gamma += &v * (v.dot(&b) / l);
-                }
-                coef_q -= &a * &gamma;
-                gamma.component_mul_assign(&norms);
-            }
-            let beta = &fit.map * &coef_q;
+        self.folds.rms(&self.residuals_with(c))
+    }
+
+    /// Out-of-fold residuals of the model with the columns `c` added.
+    fn residuals_with(&self, c: &DMat) -> DVec {
+        let (n, r) = (self.x.nrows(), self.q.ncols());
+        // The candidate's new directions: q_c = perp · vc, perp = cw − Q a_c (whitened,
+        // normalised columns), so q_c = [X, c] · [−map a_c vc; scale_c ⊙ vc].
+        let (cw, scale_c) = whitened_columns(c.clone(), self.w);
+        let a_c = tr_mul(&self.q, &cw);
+        let perp = &cw - &*self.q * &a_c;
+        let directions = if c.ncols() == 0 {
+            Vec::new()
+        } else {
+            new_directions(&perp.tr_mul(&perp).symmetric_eigen())
+        };
+        let k = directions.len();
+        let vc = DMat::from_fn(c.ncols(), k, |i, j| {
+            directions[j].1[i] / directions[j].0.sqrt()
+        });
+        let qc = &perp * &vc;
+        let yw = self.y.component_mul(self.w);
+        let h_all = qc.tr_mul(&yw);
+        let avc = &a_c * &vc;
+        let mut out = DVec::zeros(n);
+        for (fit, test) in self.fits.iter().zip(&self.folds.test) {
+            // Training coordinates [u; v] in [Q, q_c]: the block system
+            // [M, B; Bᵀ, D] [u; v] = [g; h], B = −Q_Tᵀ q_cT, D = I − q_cTᵀ q_cT, by the Schur
+            // complement of M.
+            let (u, v) = if k == 0 {
+                (&fit.m_pinv * &fit.g, DVec::zeros(0))
+            } else {
+                let qct = select_rows(&qc, test);
+                let b = -fit.qt.tr_mul(&qct);
+                let d = DMat::identity(k, k) - qct.tr_mul(&qct);
+                let h = &h_all - qct.tr_mul(&select(&yw, test));
+                let mb = &fit.m_pinv * &b;
+                let schur = d - b.tr_mul(&mb);
+                let v = pinv_psd(schur) * (h - mb.tr_mul(&fit.g));
+                let u = &fit.m_pinv * (&fit.g - &b * &v);
+                (u, v)
+            };
+            let beta = &*self.map * (&u - &avc * &v);
+            let gamma = (&vc * &v).component_mul(&scale_c);
             for &i in test {
                 let mut pred = self.x.row(i).dot(&beta.transpose());
                 if k > 0 {
@@ -389,7 +436,8 @@ impl<'a> FoldFits<'a> {
                 out[i] = self.y[i] - pred;
             }
         }
-        self.folds.rms(&out)
+        debug_assert_eq!(r, self.map.ncols());
+        out
     }
 }
 
@@ -449,6 +497,8 @@ pub(crate) fn max_abs(v: &DVec) -> f64 {
 #[derive(Clone)]
 pub(crate) struct Projector {
     q: DMat,
+    /// `map` with `(W X) · map = q`: a candidate's `Qᵀ W c` is `mapᵀ (Xᵀ W² c)`.
+    map: DMat,
     w: DVec,
     /// Whitened residuals and their components along the basis.
     rw: DVec,
@@ -475,11 +525,10 @@ fn tr_mul(a: &DMat, b: &DMat) -> DMat {
 impl Projector {
     /// The model with design `x`, weights `w` and residuals `r`.
     pub fn new(x: &DMat, w: &DVec, r: &DVec) -> Projector {
-        let mut xw = x.clone();
-        for (i, wi) in w.iter().enumerate() {
-            xw.row_mut(i).scale_mut(*wi);
-        }
-        let q = orthonormal_basis(&xw);
+        // The column-normalised whitened design: the directions [`solve`] keeps.
+        let (xw, scale) = whitened_columns(x.clone(), w);
+        let (q, map) = orthonormal_basis_and_map(&xw);
+        let map = DMat::from_fn(map.nrows(), map.ncols(), |i, j| map[(i, j)] * scale[i]);
         let rw = r.component_mul(w);
         let qtr = if q.ncols() > 0 {
             q.tr_mul(&rw)
@@ -488,10 +537,111 @@ impl Projector {
         };
         Projector {
             q,
+            map,
             w: w.clone(),
             rw,
             qtr,
         }
+    }
+
+    /// The least-squares fit of `y` by the model with design `x` and weights `w`, as a
+    /// projector: one factorisation gives the basis and the residuals ([`solve`] is for the
+    /// coefficients and their cofactor).
+    pub fn fit(x: &DMat, y: &DVec, w: &DVec) -> Projector {
+        let mut p = Projector::new(x, w, &DVec::zeros(y.len()));
+        let yw = y.component_mul(w);
+        p.rw = if p.q.ncols() > 0 {
+            &yw - &p.q * p.q.tr_mul(&yw)
+        } else {
+            yw
+        };
+        p.qtr = if p.q.ncols() > 0 {
+            p.q.tr_mul(&p.rw)
+        } else {
+            DVec::zeros(0)
+        };
+        p
+    }
+
+    /// The fit ([`Projector::fit`]) of the model with the columns `c` appended to its design:
+    /// the basis grows by the directions `c` adds (projected out twice, for rounding; as in
+    /// [`FoldFits`], directions with less than 1e-6 of their norm left are not new), and the
+    /// residuals lose their component along them — `n × rank × k` work instead of a new
+    /// factorisation. The design the result belongs to is the old one with `c` to its right.
+    pub fn extended(&self, c: &DMat) -> Projector {
+        let (n, r, p) = (self.w.len(), self.q.ncols(), self.map.nrows());
+        let k = c.ncols();
+        if k == 0 {
+            return self.clone();
+        }
+        let (cw, scale) = whitened_columns(c.clone(), &self.w);
+        let (mut a, mut perp) = (DMat::zeros(r, k), cw);
+        if r > 0 {
+            for _ in 0..2 {
+                let step = tr_mul(&self.q, &perp);
+                perp -= product(as_faer(&self.q), as_faer(&step));
+                a += step;
+            }
+        }
+        let directions = new_directions(&perp.tr_mul(&perp).symmetric_eigen());
+        let m = directions.len();
+        let v = DMat::from_fn(k, m, |i, j| directions[j].1[i] / directions[j].0.sqrt());
+        let qc = &perp * &v;
+        // [W X, W c] · [map, −map a v; 0, diag(scale) v] = [Q, qc].
+        let mut q = DMat::zeros(n, r + m);
+        q.columns_mut(0, r).copy_from(&self.q);
+        q.columns_mut(r, m).copy_from(&qc);
+        let mut map = DMat::zeros(p + k, r + m);
+        map.view_mut((0, 0), (p, r)).copy_from(&self.map);
+        if r > 0 {
+            map.view_mut((0, r), (p, m))
+                .copy_from(&(-(&self.map * (&a * &v))));
+        }
+        map.view_mut((p, r), (k, m))
+            .copy_from(&DMat::from_fn(k, m, |i, j| v[(i, j)] * scale[i]));
+        let rw = &self.rw - &qc * qc.tr_mul(&self.rw);
+        let qtr = if r + m > 0 {
+            q.tr_mul(&rw)
+        } else {
+            DVec::zeros(0)
+        };
+        Projector {
+            q,
+            map,
+            w: self.w.clone(),
+            rw,
+            qtr,
+        }
+    }
+
+    /// Weighted residual sum of squares of the model's fit.
+    pub fn rss_w(&self) -> f64 {
+        self.rw.norm_squared()
+    }
+
+    /// The least-squares coefficients of `c` on the model's design (minimum norm in the
+    /// column-normalised design, as [`solve`]'s).
+    pub fn coefficients(&self, c: &DVec) -> DVec {
+        if self.q.ncols() == 0 {
+            return DVec::zeros(self.map.nrows());
+        }
+        &self.map * self.q.tr_mul(&c.component_mul(&self.w))
+    }
+
+    /// Columns of the model's design.
+    pub fn design_columns(&self) -> usize {
+        self.map.nrows()
+    }
+
+    /// Rank of the model.
+    pub fn rank(&self) -> usize {
+        self.q.ncols()
+    }
+
+    /// Degrees of freedom of the residuals: observations of nonzero weight less the rank.
+    pub fn dof(&self) -> usize {
+        let observations = self.w.iter().filter(|w| **w > 0.0).count();
+        observations.saturating_sub(self.rank())
     }
 
     /// The projector for candidates that are zero outside `rows` (distinct, e.g. one channel's
@@ -503,6 +653,7 @@ impl Projector {
         }
         Cow::Owned(Projector {
             q: select_rows(&self.q, rows),
+            map: self.map.clone(),
             w: select(&self.w, rows),
             rw: select(&self.rw, rows),
             // Qᵀr stays the whole residual's: it meets Qᵀc, which only the rows make.
@@ -586,6 +737,35 @@ impl Projector {
         out
     }
 
+    /// The folds' fits of the projector's model (design `x`, observations `y`), on its basis.
+    pub fn fold_fits<'a>(&'a self, folds: &'a Folds, x: &'a DMat, y: &'a DVec) -> FoldFits<'a> {
+        FoldFits::with_basis(
+            folds,
+            x,
+            y,
+            &self.w,
+            Cow::Borrowed(&self.q),
+            Cow::Borrowed(&self.map),
+        )
+    }
+
+    /// `Qᵀ W C` of candidates' columns `C` from their products `xtc = Xᵀ W² C` with the model's
+    /// design `X` (p × columns, weights `W`): `mapᵀ xtc`, rank × p × columns work instead of a
+    /// pass over the observations (n × rank × columns). A search keeps the products of every
+    /// candidate with its model and adds rows as the model grows ([`weighted_products`]).
+    pub fn basis_products(&self, xtc: &DMat) -> DMat {
+        tr_mul(&self.map, xtc)
+    }
+
+    /// [`Projector::increment`] of `c` given `a = Qᵀ W c` ([`Projector::basis_products`]).
+    pub fn increment_given(&self, c: &DMat, a: DMatView<'_>) -> Increment {
+        let mut cw = c.clone();
+        for mut column in cw.column_iter_mut() {
+            column.component_mul_assign(&self.w);
+        }
+        self.increment_of(cw.as_view(), (self.q.ncols() > 0).then_some(a))
+    }
+
     /// The increment of whitened candidate columns `cw` with `a = Qᵀ cw` (`None`: no model).
     fn increment_of(&self, cw: DMatView<'_>, a: Option<DMatView<'_>>) -> Increment {
         let k = cw.ncols();
@@ -637,6 +817,73 @@ fn new_directions(eig: &SymmetricEigen<f64, Dyn>) -> Vec<(f64, DVec)> {
         .filter(|&(_, &l)| l > 1e-12 && l > 1e-12 * lambda_max)
         .map(|(i, &l)| (l, eig.eigenvectors.column(i).into_owned()))
         .collect()
+}
+
+/// `xᵀ diag(w2) c` over the observations `rows` (`None`: all) for the candidates' columns `c`
+/// (given by `column_blocks`, each block's columns side by side in order): p × (total columns),
+/// one blocked product per batch of about [`BATCH_COLUMNS`] columns, batches in parallel (the
+/// result does not depend on the number of threads).
+pub(crate) fn weighted_products(
+    x: &DMat,
+    w2: &DVec,
+    rows: Option<&[usize]>,
+    column_blocks: &[&DMat],
+) -> DMat {
+    let xs = match rows {
+        Some(rows) => {
+            let mut xs = select_rows(x, rows);
+            for (k, &i) in rows.iter().enumerate() {
+                xs.row_mut(k).scale_mut(w2[i]);
+            }
+            xs
+        }
+        None => {
+            let mut xs = x.clone();
+            for (i, v) in w2.iter().enumerate() {
+                xs.row_mut(i).scale_mut(*v);
+            }
+            xs
+        }
+    };
+    // Batches of whole blocks.
+    let mut batches: Vec<(usize, usize)> = Vec::new(); // (first block, end block)
+    let mut start = 0;
+    while start < column_blocks.len() {
+        let mut end = start;
+        let mut width = 0;
+        while end < column_blocks.len() && (end == start || width < BATCH_COLUMNS) {
+            width += column_blocks[end].ncols();
+            end += 1;
+        }
+        batches.push((start, end));
+        start = end;
+    }
+    use rayon::prelude::*;
+    let parts: Vec<DMat> = batches
+        .par_iter()
+        .map(|&(a, b)| {
+            let width: usize = column_blocks[a..b].iter().map(|c| c.ncols()).sum();
+            let mut c = DMat::zeros(xs.nrows(), width);
+            let mut at = 0;
+            for block in &column_blocks[a..b] {
+                let k = block.ncols();
+                match rows {
+                    Some(rows) => c.columns_mut(at, k).copy_from(&select_rows(block, rows)),
+                    None => c.columns_mut(at, k).copy_from(*block),
+                }
+                at += k;
+            }
+            tr_mul(&xs, &c)
+        })
+        .collect();
+    let total: usize = parts.iter().map(DMat::ncols).sum();
+    let mut out = DMat::zeros(x.ncols(), total);
+    let mut at = 0;
+    for part in parts {
+        out.columns_mut(at, part.ncols()).copy_from(&part);
+        at += part.ncols();
+    }
+    out
 }
 
 /// Candidate columns per product with the model's basis in [`Projector::increments`]: wide
@@ -755,13 +1002,26 @@ mod tests {
             test: (0..5)
                 .map(|f| (0..n).filter(|i| (i / 20) % 5 == f).collect())
                 .collect(),
-            train: (0..5)
-                .map(|f| (0..n).filter(|i| (i / 20) % 5 != f).collect())
-                .collect(),
+        };
+        // The reference: a fresh weighted least-squares fit on each fold's training rows.
+        let fresh = |x: &DMat| {
+            let mut out = DVec::zeros(n);
+            for test in &folds.test {
+                let train: Vec<usize> = (0..n).filter(|i| !test.contains(i)).collect();
+                let sol = solve(
+                    &select_rows(x, &train),
+                    &select(&y, &train),
+                    &select(&w, &train),
+                );
+                for &i in test {
+                    out[i] = y[i] - x.row(i).dot(&sol.coef.transpose());
+                }
+            }
+            folds.rms(&out)
         };
         let base = x.columns(0, 3).into_owned();
-        let fits = FoldFits::new(&folds, &base, &y, &w);
-        let fresh = |x: &DMat| folds.rms(&folds.residuals(x, &y, &w));
+        let fit = Projector::fit(&base, &y, &w);
+        let fits = fit.fold_fits(&folds, &base, &y);
         assert!((fits.rms() - fresh(&base)).abs() < 1e-10 * fresh(&base));
         // A new direction (the sine), and one already in the model (a combination of columns
         // 1 and 2), which must change nothing.

@@ -39,11 +39,14 @@ impl StructureTest {
     }
 }
 
-/// Runs every structure test on the residuals `r` of the model whose design is `x`. On a long
+/// Runs every structure test on the residuals `r` of the model whose design is `x` and fit
+/// `fit` ([`Projector::fit`]). On a long
 /// record the period scans choose their period on the observations `scan_rows` (evenly thinned)
 /// and test it on all; the Bonferroni factor counts the whole scan either way.
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn structure_tests(
     obs: &Observations,
+    fit: &Projector,
     x: &DMat,
     r: &DVec,
     w: &DVec,
@@ -51,7 +54,7 @@ pub(crate) fn structure_tests(
     dof: usize,
     scan_rows: Option<&[usize]>,
 ) -> Vec<StructureTest> {
-    let projector = Projector::new(x, w, r);
+    let projector = fit;
     // Where the period scans run: all observations, or the thinned ones.
     let thin = scan_rows.map(|rows| {
         (
@@ -61,7 +64,7 @@ pub(crate) fn structure_tests(
     });
     let (scan_obs, scan_projector) = match &thin {
         Some((o, p)) => (o, p),
-        None => (obs, &projector),
+        None => (obs, projector),
     };
     let n = obs.len();
     let channels: Vec<usize> = (0..obs.channel_names.len()).collect();

@@ -270,6 +270,9 @@ pub struct Spec {
     /// Axis: a continuous interferometer log instead of stop-and-go targets — `(runs, readings
     /// per direction)`, one reading every 20 ms while the axis creeps through its stroke.
     pub log: Option<(usize, usize)>,
+    /// Tracker: this many uniformly random targets instead of a drawn grid or 60–150 random
+    /// ones (each measured from every station: 4–6 lengths per target).
+    pub targets: Option<usize>,
 }
 
 impl Spec {
@@ -284,6 +287,7 @@ impl Spec {
             noise_scale: 1.0,
             cycles: None,
             log: None,
+            targets: None,
         }
     }
 }

@@ -185,11 +185,16 @@ fn draw_stations(rng: &mut impl Rng, strokes: [(f64, f64); 3]) -> Vec<V3> {
         .collect()
 }
 
-/// Targets: a random grid or uniform random points in the box of the strokes.
-fn draw_targets(rng: &mut impl Rng, strokes: [(f64, f64); 3]) -> Vec<[f64; 3]> {
+/// Targets: a random grid or uniform random points in the box of the strokes (`count` of them
+/// when given).
+fn draw_targets(
+    rng: &mut impl Rng,
+    strokes: [(f64, f64); 3],
+    count: Option<usize>,
+) -> Vec<[f64; 3]> {
     let lerp = |(lo, hi): (f64, f64), u: f64| lo + (hi - lo) * u;
     let round = |v: f64| (v * 1000.0).round() / 1000.0;
-    if rng.random_bool(0.5) {
+    if count.is_none() && rng.random_bool(0.5) {
         let (nx, ny, nz) = (
             rng.random_range(5..=7),
             rng.random_range(4..=5),
@@ -209,7 +214,7 @@ fn draw_targets(rng: &mut impl Rng, strokes: [(f64, f64); 3]) -> Vec<[f64; 3]> {
         }
         v
     } else {
-        let n = rng.random_range(60..=150);
+        let n = count.unwrap_or_else(|| rng.random_range(60..=150));
         (0..n)
             .map(|_| {
                 [
@@ -349,7 +354,7 @@ pub(crate) fn write(spec: &Spec, rng: &mut ChaCha8Rng, dir: &Path) -> std::io::R
         .iter()
         .map(|_| rng.random_range(80.0..=150.0))
         .collect();
-    let targets = draw_targets(rng, strokes);
+    let targets = draw_targets(rng, strokes, spec.targets);
     let noise = Normal::new(0.0, (sigma * 1e-3).max(1e-300)).expect("finite σ");
     let mut targets_csv = String::from("id,x_mm,y_mm,z_mm\n");
     let mut lengths = String::from("station,target,length_mm\n");
