@@ -176,28 +176,16 @@ impl Observations {
     /// indistinguishable from pose-dependent ones.
     pub fn revisit_interval(&self) -> Option<f64> {
         let t = self.variable_of_kind(VariableKind::Time)?;
-        let pose: Vec<&Variable> = self
-            .variables
-            .iter()
-            .filter(|v| v.kind != VariableKind::Time)
-            .collect();
-        // Poses compared to a nanometre / microradian (commanded values repeat exactly).
-        let keys: Vec<Vec<i64>> = (0..self.len())
-            .map(|i| {
-                let mut k = vec![self.channel[i] as i64];
-                k.extend(pose.iter().map(|v| (v.values[i] * 1e6).round() as i64));
-                k
-            })
-            .collect();
+        let pose = self.poses();
         let mut order: Vec<usize> = (0..self.len()).collect();
         order.sort_by(|&a, &b| {
-            keys[a]
-                .cmp(&keys[b])
+            pose[a]
+                .cmp(&pose[b])
                 .then(t.values[a].total_cmp(&t.values[b]))
         });
         let mut gaps: Vec<f64> = order
             .windows(2)
-            .filter(|w| keys[w[0]] == keys[w[1]])
+            .filter(|w| pose[w[0]] == pose[w[1]])
             .map(|w| t.values[w[1]] - t.values[w[0]])
             .filter(|g| *g > 0.0)
             .collect();
@@ -206,6 +194,26 @@ impl Observations {
         }
         gaps.sort_by(f64::total_cmp);
         Some(gaps[gaps.len() / 2])
+    }
+
+    /// The pose of each observation, as an index: observations of the same channel at the same
+    /// values of every variable but time (commanded axes, direction; compared to a nanometre /
+    /// microradian, as commanded values repeat exactly) share it, whatever their set-up.
+    pub(crate) fn poses(&self) -> Vec<usize> {
+        let pose: Vec<&Variable> = self
+            .variables
+            .iter()
+            .filter(|v| v.kind != VariableKind::Time)
+            .collect();
+        let mut index: std::collections::HashMap<Vec<i64>, usize> = Default::default();
+        (0..self.len())
+            .map(|i| {
+                let mut k = vec![self.channel[i] as i64];
+                k.extend(pose.iter().map(|v| (v.values[i] * 1e6).round() as i64));
+                let next = index.len();
+                *index.entry(k).or_insert(next)
+            })
+            .collect()
     }
 
     /// The order in which observations were taken: by time when the data have a time column,

@@ -134,7 +134,8 @@ pub struct Finding {
     /// Family of effect.
     pub family: Family,
     /// Estimated size with standard uncertainty, in the final model (the uncertainty includes
-    /// that of the period or time constant).
+    /// that of the period or time constant, and is widened to the cluster-robust one over
+    /// repeated poses where that is larger).
     pub estimates: Vec<Estimate>,
     /// The period or time constant with its standard uncertainty, where the effect has one.
     pub hyper_parameter: Option<Estimate>,
@@ -368,6 +369,13 @@ pub fn diagnose(
     };
     let w_s = whitening(obs_s);
     let pool = Pool::new(obs_s, candidates_s, base_s).with_products(base_s, &w_s);
+    // The base's fit on the searched observations: the full search's start, and the outer
+    // folds' after downdating their held-out rows.
+    let base_fit = Projector::fit(
+        &design(&base_s.iter().collect::<Vec<_>>(), n_search),
+        &obs_s.values,
+        &w_s,
+    );
     let searcher = Searcher {
         obs: obs_s,
         base: base_s,
@@ -386,7 +394,7 @@ pub fn diagnose(
     // wait for the outer folds either.
     let (concluded, held_out) = rayon::join(
         || {
-            let search = searcher.search(&w_s, &folds_s, true);
+            let search = searcher.search(&w_s, &folds_s, true, base_fit.clone());
             conclude(
                 obs,
                 &base,
@@ -398,7 +406,7 @@ pub fn diagnose(
                 search,
             )
         },
-        || searcher.held_out(&w_s),
+        || searcher.held_out(&w_s, &base_fit),
     );
     let mut diagnosis = concluded?;
     diagnosis.held_out = held_out;
@@ -481,15 +489,15 @@ fn conclude(
         gauss_newton_hyper(&searcher, &mut chosen, w);
     }
     let mut pruned = search.pruned;
-    let (terms, x, sol, fit, extended, scale, hyper_u, extended_parameters) = loop {
+    let (terms, x, sol, fit, extended, hyper_u, extended_parameters) = loop {
         let (x, fit) = searcher.fit_of(&base_fit, &searcher.with(&chosen, None));
         let terms = searcher.with(&chosen, None);
         let sol = solve(&x, &obs.values, w);
         let cv = fit.fold_fits(&folds, &x, &obs.values).residuals();
         let extended = quality(obs, &sol, &cv);
         let scale = covariance_scale(obs, extended.sigma0);
-        let (cov, hyper_u) = covariance_with_hyper(&searcher, &chosen, &x, &sol, w);
-        let extended_parameters = parameters(&terms, &sol.coef, &(cov * scale));
+        let (cov, hyper_u) = covariance_with_hyper(&searcher, &chosen, &terms, &x, &sol, w, scale);
+        let extended_parameters = parameters(&terms, &sol.coef, &cov);
         let weakest = (0..chosen.len())
             .map(|k| {
                 let e = &extended_parameters[base.len() + k].estimates;
@@ -502,16 +510,7 @@ fn conclude(
             .filter(|(_, z)| *z < 2.0)
             .min_by(|a, b| a.1.total_cmp(&b.1));
         let Some((k, _)) = weakest else {
-            break (
-                terms,
-                x,
-                sol,
-                fit,
-                extended,
-                scale,
-                hyper_u,
-                extended_parameters,
-            );
+            break (terms, x, sol, fit, extended, hyper_u, extended_parameters);
         };
         pruned.extend(searcher.remove(&mut chosen, k));
     };
@@ -533,19 +532,16 @@ fn conclude(
             estimates: extended_parameters[base.len() + k].estimates.clone(),
             hyper_parameter: hyper_of(&c.term.family, rotary(&c.term))
                 .zip(hyper_u[k])
-                .map(|((v, q), u)| {
-                    let u = u * scale.sqrt();
-                    Estimate {
-                        name: if q == Quantity::Duration {
-                            "time constant".into()
-                        } else {
-                            "period".into()
-                        },
-                        value: v,
-                        uncertainty: u,
-                        quantity: q,
-                        text: q.format(v, u),
-                    }
+                .map(|((v, q), u)| Estimate {
+                    name: if q == Quantity::Duration {
+                        "time constant".into()
+                    } else {
+                        "period".into()
+                    },
+                    value: v,
+                    uncertainty: u,
+                    quantity: q,
+                    text: q.format(v, u),
                 }),
             p_value: c.p_value,
             p_value_final: finals[k],
@@ -563,15 +559,7 @@ fn conclude(
         let mut col = base.iter().map(Term::width).sum::<usize>();
         for (k, c) in chosen.iter().enumerate() {
             let width = c.term.width();
-            let modes = period_modes(
-                obs,
-                w,
-                &x,
-                &sol,
-                col,
-                &c.term,
-                searcher.chosen_candidate(c),
-            );
+            let modes = period_modes(obs, w, &x, &sol, col, &c.term, searcher.chosen_candidate(c));
             col += width;
             let Some(h) = findings[k]
                 .hyper_parameter
@@ -974,8 +962,9 @@ impl Searcher<'_> {
     /// Completes the base, then searches for causes on top of it. Observations of weight zero
     /// take no part. `explain`: record which candidates the data cannot separate from the base
     /// (for the report; an outer fold's search only needs its causes).
-    fn search(&self, w: &DVec, folds: &Folds, explain: bool) -> SearchResult {
-        let (completed, base_fit) = self.complete(w);
+    /// `base_fit`: the fit of the base under the weights `w`.
+    fn search(&self, w: &DVec, folds: &Folds, explain: bool, base_fit: Projector) -> SearchResult {
+        let (completed, base_fit) = self.complete(base_fit);
         let base: Vec<Term> = self.base.iter().chain(&completed).cloned().collect();
         let mut found = Searcher {
             base: &base,
@@ -988,17 +977,16 @@ impl Searcher<'_> {
 
     /// The base's completion: higher orders of its component errors ([`Candidate::completes_base`]),
     /// one at a time, the most significant first, while one is significant at
-    /// [`COMPLETION_LEVEL`] (Bonferroni over those eligible). Returns the completions and the
-    /// fit of the completed base (its design: the base's, then the completions').
-    fn complete(&self, w: &DVec) -> (Vec<Term>, Projector) {
-        let n = self.obs.len();
+    /// [`COMPLETION_LEVEL`] (Bonferroni over those eligible), starting from the base's fit
+    /// `base_fit`. Returns the completions and the fit of the completed base (its design: the
+    /// base's, then the completions').
+    fn complete(&self, base_fit: Projector) -> (Vec<Term>, Projector) {
         let entries: Vec<usize> = (0..self.pool.variants.len())
             .filter(|&ci| self.candidate(ci).completes_base())
             .collect();
         let mut done: Vec<Term> = Vec::new();
         let mut used = vec![false; self.pool.variants.len()];
-        let base = design(&self.base.iter().collect::<Vec<_>>(), n);
-        let mut projector = Projector::fit(&base, &self.obs.values, w);
+        let mut projector = base_fit;
         loop {
             let terms: Vec<&Term> = self.base.iter().chain(&done).collect();
             let (rss, dof) = (projector.rss_w(), projector.dof());
@@ -1470,8 +1458,9 @@ impl Searcher<'_> {
     }
 
     /// The outer folds: for each, the base model and the whole search on the other folds
-    /// predict it. `None` when outer folds are off.
-    fn held_out(&self, w: &DVec) -> Option<HeldOut> {
+    /// predict it. `None` when outer folds are off. `base_fit`: the base's fit under `w`, which
+    /// each fold downdates for its held-out rows.
+    fn held_out(&self, w: &DVec, base_fit: &Projector) -> Option<HeldOut> {
         let k = self.params.outer_folds;
         if k < 2 {
             return None;
@@ -1498,7 +1487,8 @@ impl Searcher<'_> {
                     self.params.folds,
                     self.params.blocks_per_fold,
                 );
-                let found = self.search(&w_train, &inner, false);
+                let fold_fit = base_fit.without_rows(test, &obs.values);
+                let found = self.search(&w_train, &inner, false, fold_fit);
                 let completed: Vec<Term> =
                     self.base.iter().chain(&found.completed).cloned().collect();
                 let base = solve(
@@ -1917,17 +1907,21 @@ fn hyper_of(family: &Family, rotary: bool) -> Option<(f64, Quantity)> {
     }
 }
 
+/// The design augmented by hyper-parameter derivative columns ([`hyper_augmented`]): the
+/// solution on it, the chosen term and hyper-parameter value of each added column, the design.
+type Augmented = (Solution, Vec<(usize, f64)>, DMat);
+
 /// The residuals of the model with design `x` (solution `sol`) regressed on that design
 /// augmented by the derivative column of every chosen term's period or time constant: the
-/// augmented solution, and for each added column the chosen term and its hyper-parameter.
-/// `None` when no chosen term has one the candidate can re-evaluate.
+/// augmented solution, and for each added column the chosen term and its hyper-parameter, and
+/// the augmented design. `None` when no chosen term has one the candidate can re-evaluate.
 fn hyper_augmented(
     searcher: &Searcher<'_>,
     chosen: &[Chosen],
     x: &DMat,
     sol: &Solution,
     w: &DVec,
-) -> Option<(Solution, Vec<(usize, f64)>)> {
+) -> Option<Augmented> {
     let p = x.ncols();
     let mut col = p - chosen.iter().map(|c| c.term.width()).sum::<usize>();
     let mut extra: Vec<(usize, f64, DVec)> = Vec::new(); // (chosen, value, derivative)
@@ -1954,7 +1948,11 @@ fn hyper_augmented(
         aug.column_mut(p + e).copy_from(d);
     }
     let aug_sol = solve(&aug, &sol.residuals, w);
-    Some((aug_sol, extra.into_iter().map(|(k, h, _)| (k, h)).collect()))
+    Some((
+        aug_sol,
+        extra.into_iter().map(|(k, h, _)| (k, h)).collect(),
+        aug,
+    ))
 }
 
 /// Δχ² below which another period explains the residual about as well as the chosen one.
@@ -2081,7 +2079,7 @@ fn gauss_newton_hyper(searcher: &Searcher<'_>, chosen: &mut [Chosen], w: &DVec) 
     };
     for _ in 0..3 {
         let (x, sol) = rss_of(chosen);
-        let Some((steps, hyper)) = hyper_augmented(searcher, chosen, &x, &sol, w) else {
+        let Some((steps, hyper, _)) = hyper_augmented(searcher, chosen, &x, &sol, w) else {
             return;
         };
         let mut moved = chosen.to_vec();
@@ -2111,22 +2109,123 @@ fn gauss_newton_hyper(searcher: &Searcher<'_>, chosen: &mut [Chosen], w: &DVec) 
 fn covariance_with_hyper(
     searcher: &Searcher<'_>,
     chosen: &[Chosen],
+    terms: &[Term],
     x: &DMat,
     sol: &Solution,
     w: &DVec,
+    scale: f64,
 ) -> (DMat, Vec<Option<f64>>) {
     let p = x.ncols();
     let mut hyper = vec![None; chosen.len()];
-    let Some((aug_sol, extra)) = hyper_augmented(searcher, chosen, x, sol, w) else {
-        return (sol.cofactor.clone(), hyper);
+    let (cofactor, extra, aug) = match hyper_augmented(searcher, chosen, x, sol, w) {
+        Some((aug_sol, extra, aug)) => (aug_sol.cofactor, extra, Cow::Owned(aug)),
+        None => (sol.cofactor.clone(), Vec::new(), Cow::Borrowed(x)),
     };
+    // One block per term, then one per hyper-parameter.
+    let mut blocks: Vec<(usize, usize)> = Vec::new();
+    let mut at = 0;
+    for t in terms {
+        blocks.push((at, t.width()));
+        at += t.width();
+    }
+    blocks.extend((0..extra.len()).map(|e| (p + e, 1)));
+    let factors = pose_widening(
+        searcher.obs,
+        &aug,
+        &cofactor,
+        &sol.residuals,
+        w,
+        &blocks,
+        scale,
+    );
+    let mut d = DVec::from_element(cofactor.nrows(), scale.sqrt());
+    for (&(start, width), f) in blocks.iter().zip(&factors) {
+        for j in start..start + width {
+            d[j] *= f.sqrt();
+        }
+    }
+    let cov = DMat::from_fn(cofactor.nrows(), cofactor.ncols(), |i, j| {
+        cofactor[(i, j)] * d[i] * d[j]
+    });
     for (e, (k, _)) in extra.iter().enumerate() {
-        let v = aug_sol.cofactor[(p + e, p + e)];
+        let v = cov[(p + e, p + e)];
         if v > 0.0 {
             hyper[*k] = Some(v.sqrt());
         }
     }
-    (aug_sol.cofactor.view((0, 0), (p, p)).into_owned(), hyper)
+    (cov.view((0, 0), (p, p)).into_owned(), hyper)
+}
+
+/// Per block of parameters (`(first, width)` in the design `a`, cofactor `cof`, residuals `r`),
+/// the factor (at least 1) by which the variances of the classic covariance `cof · scale` are
+/// widened where the residuals are not independent between observations of the same pose
+/// ([`Observations::poses`]: a misfit of the model at a pose repeats in every visit, so the
+/// effective number of observations is nearer the number of poses). The cluster-robust
+/// (sandwich) covariance with poses as clusters, `cof · (Σ_g s_g s_gᵀ) · cof` with
+/// `s_g = Σ_{i∈g} a_iᵀ w_i² r_i` and the small-sample factor `G/(G−1) · (n−1)/(n−p)`, is
+/// compared with the classic one over each block: the factor is the largest ratio of their
+/// variances over the block's directions. Data without a repeated pose keep the classic one
+/// (one observation per cluster says nothing of dependence).
+fn pose_widening(
+    obs: &Observations,
+    a: &DMat,
+    cof: &DMat,
+    r: &DVec,
+    w: &DVec,
+    blocks: &[(usize, usize)],
+    scale: f64,
+) -> Vec<f64> {
+    let ones = vec![1.0; blocks.len()];
+    let pose = obs.poses();
+    let g = pose.iter().max().map_or(0, |m| m + 1);
+    let n = w.iter().filter(|w| **w > 0.0).count();
+    let pa = a.ncols();
+    if g < 2 || g >= n || n <= pa + 1 {
+        return ones;
+    }
+    let mut s = DMat::zeros(pa, g);
+    for i in 0..a.nrows() {
+        let f = w[i] * w[i] * r[i];
+        if f != 0.0 {
+            for j in 0..pa {
+                s[(j, pose[i])] += a[(i, j)] * f;
+            }
+        }
+    }
+    let correction = g as f64 / (g - 1) as f64 * (n - 1) as f64 / (n - pa) as f64;
+    let bread = cof * &s;
+    let sandwich = &bread * bread.transpose() * correction;
+    blocks
+        .iter()
+        .map(|&(start, width)| {
+            let classic = cof.view((start, start), (width, width)) * scale;
+            let robust = sandwich.view((start, start), (width, width)).into_owned();
+            // Largest generalised eigenvalue of (robust, classic) over the directions the
+            // classic covariance has.
+            let eig = classic.symmetric_eigen();
+            let top = eig.eigenvalues.max();
+            if top.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
+                return 1.0;
+            }
+            let keep: Vec<usize> = (0..width)
+                .filter(|&k| eig.eigenvalues[k] > 1e-12 * top)
+                .collect();
+            let root = DMat::from_fn(width, keep.len(), |i, j| {
+                eig.eigenvectors[(i, keep[j])] / eig.eigenvalues[keep[j]].sqrt()
+            });
+            let ratio = root.transpose() * robust * &root;
+            let lambda = if ratio.nrows() == 0 {
+                1.0
+            } else {
+                ratio.symmetric_eigen().eigenvalues.max()
+            };
+            if lambda.is_finite() {
+                lambda.max(1.0)
+            } else {
+                1.0
+            }
+        })
+        .collect()
 }
 
 /// The base completion called `name` on all observations.

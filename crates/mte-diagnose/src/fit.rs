@@ -549,18 +549,23 @@ impl Projector {
     /// coefficients and their cofactor).
     pub fn fit(x: &DMat, y: &DVec, w: &DVec) -> Projector {
         let mut p = Projector::new(x, w, &DVec::zeros(y.len()));
-        let yw = y.component_mul(w);
-        p.rw = if p.q.ncols() > 0 {
-            &yw - &p.q * p.q.tr_mul(&yw)
+        p.fit_residuals(y);
+        p
+    }
+
+    /// Sets the residuals to those of the least-squares fit of `y`.
+    fn fit_residuals(&mut self, y: &DVec) {
+        let yw = y.component_mul(&self.w);
+        self.rw = if self.q.ncols() > 0 {
+            &yw - &self.q * self.q.tr_mul(&yw)
         } else {
             yw
         };
-        p.qtr = if p.q.ncols() > 0 {
-            p.q.tr_mul(&p.rw)
+        self.qtr = if self.q.ncols() > 0 {
+            self.q.tr_mul(&self.rw)
         } else {
             DVec::zeros(0)
         };
-        p
     }
 
     /// The fit ([`Projector::fit`]) of the model with the columns `c` appended to its design:
@@ -612,6 +617,37 @@ impl Projector {
             rw,
             qtr,
         }
+    }
+
+    /// The fit ([`Projector::fit`] of `y`) of the same model with the observations `rows`
+    /// given zero weight (an outer fold's held-out rows), by downdating the basis: with `M =
+    /// I − Q_RᵀQ_R = V Λ Vᵀ` the remaining rows' Gram, `Q V Λ^{-1/2}` on the other rows is
+    /// orthonormal — `n × rank²` work instead of a factorisation. Directions the remaining rows
+    /// do not determine (λ below [`FOLD_TOLERANCE`]) are dropped; the rare poorly determined
+    /// ones (λ below 1e-6) get a second orthonormalisation.
+    pub fn without_rows(&self, rows: &[usize], y: &DVec) -> Projector {
+        let mut w = self.w.clone();
+        for &i in rows {
+            w[i] = 0.0;
+        }
+        let r = self.q.ncols();
+        if r == 0 {
+            return Projector::fit(&DMat::zeros(w.len(), self.map.nrows()), y, &w);
+        }
+        let mut q = self.q.clone();
+        for &i in rows {
+            q.row_mut(i).fill(0.0);
+        }
+        let (q, map) = orthonormalised(q, self.map.clone());
+        let mut p = Projector {
+            q,
+            map,
+            w,
+            rw: DVec::zeros(0),
+            qtr: DVec::zeros(0),
+        };
+        p.fit_residuals(y);
+        p
     }
 
     /// Weighted residual sum of squares of the model's fit.
@@ -884,6 +920,34 @@ pub(crate) fn weighted_products(
         at += part.ncols();
     }
     out
+}
+
+/// `q` (n × r, columns spanning what remains of an orthonormal basis after some rows were
+/// zeroed) made orthonormal again, with `map` (p × r) carried along: `q V Λ^{-1/2}` from the
+/// eigen-decomposition `qᵀq = V Λ Vᵀ`, directions with λ below [`FOLD_TOLERANCE`] × the largest
+/// dropped; repeated once when a kept λ is below 1e-6 (its rounding, ε/λ, would show).
+fn orthonormalised(q: DMat, map: DMat) -> (DMat, DMat) {
+    let (mut q, mut map) = (q, map);
+    for _ in 0..2 {
+        let eig = tr_mul(&q, &q).symmetric_eigen();
+        let top = eig.eigenvalues.max().max(0.0);
+        let keep: Vec<usize> = (0..eig.eigenvalues.len())
+            .filter(|&k| eig.eigenvalues[k] > FOLD_TOLERANCE * top && top > 0.0)
+            .collect();
+        let s = DMat::from_fn(q.ncols(), keep.len(), |i, j| {
+            eig.eigenvectors[(i, keep[j])] / eig.eigenvalues[keep[j]].sqrt()
+        });
+        let smallest = keep
+            .iter()
+            .map(|&k| eig.eigenvalues[k] / top)
+            .fold(1.0, f64::min);
+        q = product(as_faer(&q), as_faer(&s));
+        map = &map * &s;
+        if smallest >= 1e-6 {
+            break;
+        }
+    }
+    (q, map)
 }
 
 /// Candidate columns per product with the model's basis in [`Projector::increments`]: wide
