@@ -1090,8 +1090,15 @@ impl Searcher<'_> {
             let present = |name: &str| {
                 terms.iter().any(|t| t.name == name)
                     || self.pool.by_name.get(name).is_some_and(|&k| {
-                        let c = &self.pool.variants[k][0].columns;
-                        projector.increment(c).separability < SEPARABILITY_TOLERANCE
+                        let t = &self.pool.variants[k][0];
+                        let inc = match &products {
+                            Some(qc) => projector.increment_given(
+                                &t.columns,
+                                qc.columns(self.pool.offsets[k][0], t.width()),
+                            ),
+                            None => projector.increment(&t.columns),
+                        };
+                        inc.separability < SEPARABILITY_TOLERANCE
                     })
             };
             let eligible: Vec<usize> = (0..entries)
@@ -1167,7 +1174,7 @@ impl Searcher<'_> {
             }
             // Refining a period or time constant between its grid neighbours is worth it only
             // where the grid's best comes near significance, and only for the candidates that
-            // can reach the shortlist: the most significant on the grid (twice the shortlist).
+            // can reach the shortlist: the most significant on the grid.
             let p_of = |inc: &Increment| {
                 (f_test(rss, inc.delta_rss, inc.new_rank, dof) * variants_tested as f64).min(1.0)
             };
@@ -1177,7 +1184,7 @@ impl Searcher<'_> {
                     .total_cmp(&p_of(&graded[b].2))
                     .then(graded[b].2.delta_rss.total_cmp(&graded[a].2.delta_rss))
             });
-            for &g in order.iter().take(2 * params.shortlist) {
+            for &g in order.iter().take(params.shortlist) {
                 let (ci, vi, inc) = &mut graded[g];
                 if p_of(inc) >= REFINE_LEVEL * params.alpha {
                     continue;
