@@ -81,7 +81,7 @@ fn run_realistic(args: &[String]) -> Result<(), String> {
         .map(|(e, size)| {
             use rand::SeedableRng;
             let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed ^ 0x5eed_5eed_5eed_5eed);
-            e.hidden(kind, size, &mut rng)
+            e.hidden(size, &mut rng)
         })
         .into_iter()
         .collect();

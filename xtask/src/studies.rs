@@ -349,9 +349,9 @@ impl Effect {
         }
     }
 
-    /// The hidden effect of size `size` (in [`Effect::unit`]) for `kind`, other parameters
-    /// drawn from `rng`.
-    pub fn hidden(self, kind: Kind, size: f64, rng: &mut impl Rng) -> Hidden {
+    /// The hidden effect of size `size` (in [`Effect::unit`]), other parameters drawn from
+    /// `rng`.
+    pub fn hidden(self, size: f64, rng: &mut impl Rng) -> Hidden {
         let sign = if rng.random_bool(0.5) { 1.0 } else { -1.0 };
         match self {
             Effect::Pitch => Hidden::Pitch {
@@ -386,9 +386,7 @@ impl Effect {
             },
             Effect::RiseFall => Hidden::RiseFall {
                 um: sign * size,
-                // axis runs last ~10–40 min, R-test cycles ~1–3 h
-                tau_s: rng.random_range(0.3..=0.7)
-                    * if kind == Kind::Axis { 1200.0 } else { 4000.0 },
+                peak: rng.random_range(0.3..=0.7),
             },
             Effect::TwoAxis => Hidden::TwoAxis { um: sign * size },
         }
@@ -590,7 +588,7 @@ pub fn power_with(
         .map(|&size| {
             let cell = format!("power-{}-{:?}-{size}", kind.name(), effect);
             let records = run_cell(&cell, n, base_seed, |rng| {
-                let mut s = Spec::new(kind, &[effect.hidden(kind, size, rng)]);
+                let mut s = Spec::new(kind, &[effect.hidden(size, rng)]);
                 s.base_model = base_model.clone();
                 s
             });
@@ -687,7 +685,7 @@ pub fn openworld_with(
 ) -> OpenWorldSummary {
     let cell = format!("openworld-{}-{:?}", kind.name(), effect);
     let records = run_cell(&cell, n, base_seed, |rng| {
-        let mut s = Spec::new(kind, &[effect.hidden(kind, size, rng)]);
+        let mut s = Spec::new(kind, &[effect.hidden(size, rng)]);
         s.base_model = base_model.clone();
         s
     });

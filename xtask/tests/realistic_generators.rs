@@ -257,10 +257,7 @@ fn axis_pitch_is_a_sine_of_the_stated_amplitude_and_period() {
 fn generators_are_deterministic_and_hide_the_truth() {
     for kind in Kind::ALL {
         let hidden: Vec<Hidden> = match kind {
-            Kind::Axis => vec![Hidden::RiseFall {
-                um: 2.0,
-                tau_s: 500.0,
-            }],
+            Kind::Axis => vec![Hidden::RiseFall { um: 2.0, peak: 0.5 }],
             Kind::Tracker => vec![Hidden::Pitch {
                 axis: 0,
                 amplitude_um: 2.0,

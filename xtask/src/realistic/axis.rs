@@ -142,7 +142,13 @@ pub(crate) fn write(spec: &Spec, rng: &mut ChaCha8Rng, dir: &Path) -> std::io::R
                     detail: format!("sawtooth, period {period_mm:.2} mm"),
                 });
             }
-            Hidden::RiseFall { um, tau_s } => {
+            Hidden::RiseFall { um, peak } => {
+                // The time of the last reading (the loop below: runs × two directions of
+                // `targets` readings `dt` apart, a pause between directions).
+                let sweeps = 2 * runs;
+                let duration =
+                    (sweeps * targets.len()) as f64 * dt + (sweeps - 1) as f64 * pause - dt;
+                let tau_s = peak * duration;
                 parts.push(Box::new(move |_, _, t| {
                     um * (t / tau_s) * (1.0 - t / tau_s).exp()
                 }));

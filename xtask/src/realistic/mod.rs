@@ -138,8 +138,9 @@ pub enum Hidden {
     RiseFall {
         /// Peak, µm.
         um: f64,
-        /// Time of the peak, s.
-        tau_s: f64,
+        /// Time of the peak as a fraction of the measuring time (R-test: of its readings' time
+        /// plus the mean pause between cycles, the pauses being drawn as the cycles are).
+        peak: f64,
     },
     /// Open world: X straightness (tip deviation in Y) whose size grows with Z: a smooth shape
     /// of x with peak `um` at the bottom of the Z stroke and zero at its top (tracker).

@@ -307,6 +307,7 @@ pub(crate) fn write(spec: &Spec, rng: &mut ChaCha8Rng, dir: &Path) -> std::io::R
     let sigma = rng.random_range(0.2..=0.8) * spec.noise_scale;
     let mut effects = Vec::new();
     let mut min_cycles = 1;
+    let mut rise_fall: Option<(f64, f64)> = None; // (peak mm, fraction of the measuring time)
     for h in &spec.hidden {
         match *h {
             Hidden::PivotDrift { rotary, um, tau_s } if rotary < 2 => {
@@ -328,14 +329,9 @@ pub(crate) fn write(spec: &Spec, rng: &mut ChaCha8Rng, dir: &Path) -> std::io::R
                     detail: format!("first order, τ = {tau_s:.0} s"),
                 });
             }
-            Hidden::RiseFall { um, tau_s } => {
-                m.drift.push((
-                    0,
-                    TimeFn::RiseFall {
-                        a: um * 1e-3,
-                        tau_s,
-                    },
-                ));
+            Hidden::RiseFall { um, peak } => {
+                // Its time constant once the programme's length is known (below).
+                rise_fall = Some((um * 1e-3, peak));
                 min_cycles = min_cycles.max(4);
                 effects.push(TrueEffect {
                     iso_name_hint: "EX0B".into(),
@@ -344,7 +340,10 @@ pub(crate) fn write(spec: &Spec, rng: &mut ChaCha8Rng, dir: &Path) -> std::io::R
                     unit: "um",
                     value: um * 1e-3,
                     signed: true,
-                    detail: format!("rise and fall, peak at {tau_s:.0} s"),
+                    detail: format!(
+                        "rise and fall, peak at {:.0} % of the measuring time",
+                        100.0 * peak
+                    ),
                 });
             }
             Hidden::AngularPositioning {
@@ -440,6 +439,19 @@ pub(crate) fn write(spec: &Spec, rng: &mut ChaCha8Rng, dir: &Path) -> std::io::R
     let b_step: f64 = [5.0, 7.5, 10.0][rng.random_range(0..3)];
     let c_step: f64 = [10.0, 15.0, 20.0][rng.random_range(0..3)];
     let dt = rng.random_range(3.0..=5.0_f64);
+    if let Some((a, peak)) = rise_fall {
+        // The readings' time (the programme below, per ball and cycle) and the mean pause
+        // between cycles.
+        let per_ball = (2.0 * b_max / b_step).round() + 1.0 + 2.0 * (360.0 / c_step).round() + 1.0;
+        let duration = (cycles * balls.len()) as f64 * per_ball * dt + 300.0 * (cycles - 1) as f64;
+        m.drift.push((
+            0,
+            TimeFn::RiseFall {
+                a,
+                tau_s: peak * duration,
+            },
+        ));
+    }
     let noise = Normal::new(0.0, sigma.max(1e-300)).expect("finite σ");
     let mut csv = String::from("setup,test,t_s,x_mm,y_mm,z_mm,b_deg,c_deg,dx_um,dy_um,dz_um\n");
     let mut setups = Vec::new();
