@@ -490,8 +490,8 @@ fn conclude(
     }
     let mut pruned = search.pruned;
     let (terms, x, sol, fit, extended, hyper_u, extended_parameters) = loop {
-        let (x, fit) = searcher.fit_of(&base_fit, &searcher.with(&chosen, None));
         let terms = searcher.with(&chosen, None);
+        let (x, fit) = searcher.fit_of(&base_fit, &terms);
         let sol = solve(&x, &obs.values, w);
         let cv = fit.fold_fits(&folds, &x, &obs.values).residuals();
         let extended = quality(obs, &sol, &cv);
@@ -803,7 +803,7 @@ struct Pool {
 
 /// `Xᵀ W² C`: the base design `X` (weights `W`) against every variant's columns `C` side by
 /// side, formed once on all observations. A search scores a variant from these products and its
-/// model's basis ([`Projector::increment_from_products`]) instead of a pass over the
+/// model's basis ([`Projector::basis_products`]) instead of a pass over the
 /// observations per variant and step; an outer fold's search (weights zero on its held-out
 /// rows) subtracts those rows' share.
 struct BaseProducts {
@@ -1074,8 +1074,7 @@ impl Searcher<'_> {
         let mut refined: std::collections::HashSet<(usize, usize)> = Default::default();
 
         loop {
-            let p0 = base_fit.design_columns();
-            let projector = base_fit.extended(&x.columns(p0, x.ncols() - p0).into_owned());
+            let projector = base_fit.extended_to(&x);
             let rss = projector.rss_w();
             let products = self
                 .pool
@@ -1196,11 +1195,10 @@ impl Searcher<'_> {
                     refined.insert((*ci, *vi));
                 }
             }
-            let scored: Vec<Scored> = graded
+            let mut scored: Vec<Scored> = graded
                 .iter()
                 .map(|(ci, vi, inc)| (*ci, *vi, p_of(inc), inc.delta_rss / rss.max(1e-300)))
                 .collect();
-            let mut scored = scored;
             scored.sort_by(|a, b| a.2.total_cmp(&b.2).then(b.3.total_cmp(&a.3)));
             let mut ranking = Vec::new();
             let mut best: Option<(usize, usize, f64)> = None; // (entry, variant, cv rms)
@@ -1400,8 +1398,7 @@ impl Searcher<'_> {
     /// The design of `terms` (the base's, then others) and its fit, from the base's fit.
     fn fit_of(&self, base_fit: &Projector, terms: &[Term]) -> (DMat, Projector) {
         let x = design(&terms.iter().collect::<Vec<_>>(), self.obs.len());
-        let p0 = base_fit.design_columns();
-        let fit = base_fit.extended(&x.columns(p0, x.ncols() - p0).into_owned());
+        let fit = base_fit.extended_to(&x);
         (x, fit)
     }
 

@@ -664,6 +664,12 @@ impl Projector {
         p
     }
 
+    /// [`Projector::extended`] to the design `x`, whose first columns are this model's.
+    pub fn extended_to(&self, x: &DMat) -> Projector {
+        let p0 = self.design_columns();
+        self.extended(&x.columns(p0, x.ncols() - p0).into_owned())
+    }
+
     /// Weighted residual sum of squares of the model's fit.
     pub fn rss_w(&self) -> f64 {
         self.rw.norm_squared()
