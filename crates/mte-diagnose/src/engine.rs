@@ -368,14 +368,11 @@ pub fn diagnose(
         None => (obs, &base[..], candidates),
     };
     let w_s = whitening(obs_s);
-    let pool = Pool::new(obs_s, candidates_s, base_s).with_products(base_s, &w_s);
+    let x_base = design(&base_s.iter().collect::<Vec<_>>(), n_search);
     // The base's fit on the searched observations: the full search's start, and the outer
     // folds' after downdating their held-out rows.
-    let base_fit = Projector::fit(
-        &design(&base_s.iter().collect::<Vec<_>>(), n_search),
-        &obs_s.values,
-        &w_s,
-    );
+    let base_fit = Projector::fit(&x_base, &obs_s.values, &w_s);
+    let pool = Pool::new(obs_s, candidates_s, base_s, x_base, &w_s);
     let searcher = Searcher {
         obs: obs_s,
         base: base_s,
@@ -693,7 +690,7 @@ fn conclude(
         obs,
         &chosen,
         &terms,
-        (&x, w, &sol),
+        &fit,
         params.alpha,
         &covered,
     ));
@@ -797,8 +794,8 @@ struct Pool {
     by_name: HashMap<String, usize>,
     /// Column of each variant in the variants' columns side by side (pool order).
     offsets: Vec<Vec<usize>>,
-    /// The base design's products with every variant ([`Pool::with_products`]).
-    products: Option<BaseProducts>,
+    /// The base design's products with every variant.
+    products: BaseProducts,
 }
 
 /// `Xᵀ W² C`: the base design `X` (weights `W`) against every variant's columns `C` side by
@@ -806,6 +803,7 @@ struct Pool {
 /// model's basis ([`Projector::basis_products`]) instead of a pass over the
 /// observations per variant and step; an outer fold's search (weights zero on its held-out
 /// rows) subtracts those rows' share.
+#[derive(Default)]
 struct BaseProducts {
     x: DMat,
     w: DVec,
@@ -813,7 +811,15 @@ struct BaseProducts {
 }
 
 impl Pool {
-    fn new(obs: &Observations, candidates: &[Box<dyn Candidate>], base: &[Term]) -> Pool {
+    /// The pool of `candidates` on `obs`, with the products of the base's design `x_base`
+    /// (weights `w`) with every variant.
+    fn new(
+        obs: &Observations,
+        candidates: &[Box<dyn Candidate>],
+        base: &[Term],
+        x_base: DMat,
+        w: &DVec,
+    ) -> Pool {
         let n = obs.len();
         let mut variants = Vec::new();
         let mut source = Vec::new();
@@ -852,13 +858,20 @@ impl Pool {
                     .collect()
             })
             .collect();
-        Pool {
+        let mut pool = Pool {
             variants,
             source,
             by_name,
             offsets,
-            products: None,
-        }
+            products: BaseProducts::default(),
+        };
+        let a = weighted_products(&x_base, &w.component_mul(w), None, &pool.column_blocks());
+        pool.products = BaseProducts {
+            x: x_base,
+            w: w.clone(),
+            a,
+        };
+        pool
     }
 
     /// Every variant's columns, in pool order.
@@ -866,46 +879,30 @@ impl Pool {
         self.variants.iter().flatten().map(|t| &t.columns).collect()
     }
 
-    /// The pool with the products of the design of `base` (weights `w`) with every variant.
-    fn with_products(mut self, base: &[Term], w: &DVec) -> Pool {
-        let x = design(&base.iter().collect::<Vec<_>>(), w.len());
-        let w2 = w.component_mul(w);
-        let a = weighted_products(&x, &w2, None, &self.column_blocks());
-        self.products = Some(BaseProducts { x, w: w.clone(), a });
-        self
-    }
-
     /// The products of the model design `x` with every variant under weights `w`, given those
-    /// of its first columns `fixed` (rows of `Xᵀ W² C`, [`Pool::base_products`]); `None`
-    /// without products.
-    fn model_products(&self, fixed: Option<&DMat>, x: &DMat, w: &DVec) -> Option<DMat> {
-        let fixed = fixed?;
+    /// of its first columns `fixed` (rows of `Xᵀ W² C`, [`Pool::base_products`]).
+    fn model_products(&self, fixed: &DMat, x: &DMat, w: &DVec) -> DMat {
         let p0 = fixed.nrows();
         let extra = x.columns(p0, x.ncols() - p0).into_owned();
         let e = weighted_products(&extra, &w.component_mul(w), None, &self.column_blocks());
         let mut out = DMat::zeros(x.ncols(), fixed.ncols());
         out.rows_mut(0, p0).copy_from(fixed);
         out.rows_mut(p0, e.nrows()).copy_from(&e);
-        Some(out)
+        out
     }
 
     /// The products of the search base's design `x` (the pool's base first, then its
     /// completions) with every variant under weights `w`: the pool's, less the share of the
     /// rows whose weight differs (an outer fold's held-out rows), plus the completions' rows.
-    fn base_products(&self, x: &DMat, w: &DVec) -> Option<DMat> {
-        let bp = self.products.as_ref()?;
-        let p0 = bp.x.ncols();
-        if x.ncols() < p0 {
-            return None;
-        }
-        let blocks = self.column_blocks();
+    fn base_products(&self, x: &DMat, w: &DVec) -> DMat {
+        let bp = &self.products;
         let differ: Vec<usize> = (0..w.len()).filter(|&i| w[i] != bp.w[i]).collect();
         let mut base = bp.a.clone();
         if !differ.is_empty() {
             let dw2 = DVec::from_fn(w.len(), |i, _| bp.w[i] * bp.w[i] - w[i] * w[i]);
-            base -= weighted_products(&bp.x, &dw2, Some(&differ), &blocks);
+            base -= weighted_products(&bp.x, &dw2, Some(&differ), &self.column_blocks());
         }
-        self.model_products(Some(&base), x, w)
+        self.model_products(&base, x, w)
     }
 }
 
@@ -1076,10 +1073,17 @@ impl Searcher<'_> {
         loop {
             let projector = base_fit.extended_to(&x);
             let rss = projector.rss_w();
-            let products = self
-                .pool
-                .model_products(base_products.as_ref(), &x, w)
-                .map(|xp| projector.basis_products(&xp));
+            // Every variant's `Qᵀ W c`, from the products; a variant a refinement changed is
+            // projected directly.
+            let qc = projector.basis_products(&self.pool.model_products(&base_products, &x, w));
+            let increment = |ci: usize, vi: usize, t: &Term| {
+                if refined.contains(&(ci, vi)) {
+                    projector.increment(&t.columns)
+                } else {
+                    let at = self.pool.offsets[ci][vi];
+                    projector.increment_given(&t.columns, qc.columns(at, t.width()))
+                }
+            };
             let fold_fits = projector.fold_fits(folds, &x, y);
             let cv_rms = fold_fits.rms();
             let dof = projector.dof();
@@ -1089,15 +1093,8 @@ impl Searcher<'_> {
             let present = |name: &str| {
                 terms.iter().any(|t| t.name == name)
                     || self.pool.by_name.get(name).is_some_and(|&k| {
-                        let t = &self.pool.variants[k][0];
-                        let inc = match &products {
-                            Some(qc) => projector.increment_given(
-                                &t.columns,
-                                qc.columns(self.pool.offsets[k][0], t.width()),
-                            ),
-                            None => projector.increment(&t.columns),
-                        };
-                        inc.separability < SEPARABILITY_TOLERANCE
+                        increment(k, 0, &self.pool.variants[k][0]).separability
+                            < SEPARABILITY_TOLERANCE
                     })
             };
             let eligible: Vec<usize> = (0..entries)
@@ -1127,23 +1124,8 @@ impl Searcher<'_> {
                             || !near_a_component(obs, t, &chosen, self.pool.source[ci], None)
                     })
                     .collect();
-                let increments: Vec<Increment> = match &products {
-                    Some(qc) => tried
-                        .iter()
-                        .map(|&(vi, t)| {
-                            if refined.contains(&(ci, vi)) {
-                                projector.increment(&t.columns)
-                            } else {
-                                let at = self.pool.offsets[ci][vi];
-                                projector.increment_given(&t.columns, qc.columns(at, t.width()))
-                            }
-                        })
-                        .collect(),
-                    None => {
-                        projector.increments(tried.len(), |i| Cow::Borrowed(&tried[i].1.columns))
-                    }
-                };
-                for (&(vi, t), inc) in tried.iter().zip(increments) {
+                for &(vi, t) in &tried {
+                    let inc = increment(ci, vi, t);
                     if inc.separability < SEPARABILITY_TOLERANCE || inc.new_rank < t.width() {
                         continue;
                     }
@@ -1661,15 +1643,14 @@ fn aliased_harmonic_families(
             .filter(|(i, _)| *i < base_len || !group.contains(&(i - base_len)))
             .map(|(_, t)| t)
             .collect();
-        let x_rest = design(&rest, n);
-        let without = solve(&x_rest, &obs.values, w);
-        let projector = Projector::new(&x_rest, w, &without.residuals);
+        let projector = Projector::fit(&design(&rest, n), &obs.values, w);
+        let rss_without = projector.rss_w();
         let members = group
             .iter()
             .map(|&k| chosen[k].term.columns.clone())
             .reduce(|a, b| hcat(&a, &b))
             .expect("two members");
-        let rss_found = without.rss_w - projector.increment(&members).delta_rss;
+        let rss_found = rss_without - projector.increment(&members).delta_rss;
         let aic_found = rss_found / s2 + 2.0 * (3 * group.len()) as f64;
         // The fundamental: any period of the cause's scan (an alias of the true one is as good
         // a start as the true one), refined at the series' own resolution.
@@ -1708,7 +1689,7 @@ fn aliased_harmonic_families(
                 .into_iter()
                 .zip(&columns)
                 .map(|(inc, c)| match c {
-                    Some(_) => without.rss_w - inc.delta_rss,
+                    Some(_) => rss_without - inc.delta_rss,
                     None => f64::INFINITY,
                 })
                 .collect()
@@ -1851,13 +1832,13 @@ fn compound_drifts(findings: &[Finding]) -> Vec<Compound> {
 /// Drifts found in one form (linear or first-order) whose course the data say is another: a
 /// smooth curve of the same parameter in time (its column times Legendre polynomials of degree
 /// 1–4 in t) still explains significantly more once the final model holds them (F test at
-/// `alpha`, Bonferroni over the drifts tested). Said in one sentence: the finding describes a
-/// drift of that parameter, not its course.
+/// `alpha`, Bonferroni over the drifts tested; `fit`: the final model's). Said in one sentence:
+/// the finding describes a drift of that parameter, not its course.
 fn drift_shapes(
     obs: &Observations,
     chosen: &[Chosen],
     terms: &[Term],
-    (x, w, sol): (&DMat, &DVec, &Solution),
+    fit: &Projector,
     alpha: f64,
     covered: &[String],
 ) -> Vec<Compound> {
@@ -1872,7 +1853,6 @@ fn drift_shapes(
     if drifts.is_empty() {
         return Vec::new();
     }
-    let projector = Projector::new(x, w, &sol.residuals);
     let curve = crate::basis::legendre_columns(&t.values, 1..=4);
     drifts
         .iter()
@@ -1883,8 +1863,9 @@ fn drift_shapes(
             for mut c in cols.column_iter_mut() {
                 c.component_mul_assign(&constant);
             }
-            let inc = projector.increment(&cols);
-            let p = (f_test(sol.rss_w, inc.delta_rss, inc.new_rank, sol.dof()) * drifts.len() as f64)
+            let inc = fit.increment(&cols);
+            let p = (f_test(fit.rss_w(), inc.delta_rss, inc.new_rank, fit.dof())
+                * drifts.len() as f64)
                 .min(1.0);
             (inc.new_rank > 0 && p < alpha).then(|| Compound {
                 note: format!(
@@ -2002,8 +1983,8 @@ fn period_modes(
     let rest = DMat::from_fn(n, p - width, |i, j| {
         x[(i, if j < col { j } else { j + width })]
     });
-    let without = solve(&rest, &obs.values, w);
-    let projector = Projector::new(&rest, w, &without.residuals);
+    let projector = Projector::fit(&rest, &obs.values, w);
+    let rss_without = projector.rss_w();
     let delta0 = projector.increment(&term.columns).delta_rss;
     let s2 = (sol.rss_w / sol.dof().max(1) as f64).max(1e-300);
     let grid: Vec<(f64, Term)> = candidate
@@ -2032,7 +2013,7 @@ fn period_modes(
         .collect();
     optima.sort_by(|&a, &b| profile[b].1.total_cmp(&profile[a].1));
     optima.truncate(6);
-    let score = |t: &Term| without.rss_w - projector.increment(&t.columns).delta_rss;
+    let score = |t: &Term| rss_without - projector.increment(&t.columns).delta_rss;
     let refined: Vec<(f64, f64, Term)> = optima
         .into_iter()
         .map(|i| {

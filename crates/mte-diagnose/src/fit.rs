@@ -391,8 +391,7 @@ impl<'a> FoldFits<'a> {
 
     /// RMS of the out-of-fold residuals of the model.
     pub fn rms(&self) -> f64 {
-        self.folds
-            .rms(&self.residuals_with(&DMat::zeros(self.x.nrows(), 0)))
+        self.folds.rms(&self.residuals())
     }
 
     /// RMS of the out-of-fold residuals of the model with the columns `c` added (the same as
@@ -403,22 +402,15 @@ impl<'a> FoldFits<'a> {
 
     /// Out-of-fold residuals of the model with the columns `c` added.
     fn residuals_with(&self, c: &DMat) -> DVec {
-        let (n, r) = (self.x.nrows(), self.q.ncols());
-        // The candidate's new directions: q_c = perp · vc, perp = cw − Q a_c (whitened,
-        // normalised columns), so q_c = [X, c] · [−map a_c vc; scale_c ⊙ vc].
+        let n = self.x.nrows();
+        // The candidate's new directions q_c = [X, c] · [−map a_c vc; scale_c ⊙ vc].
         let (cw, scale_c) = whitened_columns(c.clone(), self.w);
-        let a_c = tr_mul(&self.q, &cw);
-        let perp = &cw - &*self.q * &a_c;
-        let directions = if c.ncols() == 0 {
-            Vec::new()
-        } else {
-            new_directions(&perp.tr_mul(&perp).symmetric_eigen())
-        };
-        let k = directions.len();
-        let vc = DMat::from_fn(c.ncols(), k, |i, j| {
-            directions[j].1[i] / directions[j].0.sqrt()
-        });
-        let qc = &perp * &vc;
+        let Beyond {
+            a: a_c,
+            v: vc,
+            q: qc,
+        } = beyond(&self.q, cw);
+        let k = qc.ncols();
         let yw = self.y.component_mul(self.w);
         let h_all = qc.tr_mul(&yw);
         let avc = &a_c * &vc;
@@ -450,9 +442,42 @@ impl<'a> FoldFits<'a> {
                 out[i] = self.y[i] - pred;
             }
         }
-        debug_assert_eq!(r, self.map.ncols());
         out
     }
+}
+
+/// The directions whitened, column-normalised columns `cw` (n × k) add to the orthonormal
+/// basis `q` (n × r): `cw` with `q` projected out twice (for rounding), whose Gram's
+/// eigenpairs that are new directions ([`new_directions`]) make them orthonormal.
+struct Beyond {
+    /// `Qᵀ cw` (both passes), r × k.
+    a: DMat,
+    /// `V Λ^{-1/2}`, k × m: the new directions are `(cw − Q a) v`.
+    v: DMat,
+    /// The new directions, n × m, orthonormal and orthogonal to `q`.
+    q: DMat,
+}
+
+fn beyond(q: &DMat, cw: DMat) -> Beyond {
+    let (r, k) = (q.ncols(), cw.ncols());
+    let (mut a, mut perp) = (DMat::zeros(r, k), cw);
+    if r > 0 && k > 0 {
+        for _ in 0..2 {
+            let step = tr_mul(q, &perp);
+            perp -= product(as_faer(q), as_faer(&step));
+            a += step;
+        }
+    }
+    let directions = if k == 0 {
+        Vec::new()
+    } else {
+        new_directions(&perp.tr_mul(&perp).symmetric_eigen())
+    };
+    let v = DMat::from_fn(k, directions.len(), |i, j| {
+        directions[j].1[i] / directions[j].0.sqrt()
+    });
+    let q = &perp * &v;
+    Beyond { a, v, q }
 }
 
 /// Splits the nonzero columns of `c` into those that keep at least [`SEPARABILITY_TOLERANCE`]
@@ -594,18 +619,8 @@ impl Projector {
             return self.clone();
         }
         let (cw, scale) = whitened_columns(c.clone(), &self.w);
-        let (mut a, mut perp) = (DMat::zeros(r, k), cw);
-        if r > 0 {
-            for _ in 0..2 {
-                let step = tr_mul(&self.q, &perp);
-                perp -= product(as_faer(&self.q), as_faer(&step));
-                a += step;
-            }
-        }
-        let directions = new_directions(&perp.tr_mul(&perp).symmetric_eigen());
-        let m = directions.len();
-        let v = DMat::from_fn(k, m, |i, j| directions[j].1[i] / directions[j].0.sqrt());
-        let qc = &perp * &v;
+        let Beyond { a, v, q: qc } = beyond(&self.q, cw);
+        let m = qc.ncols();
         // [W X, W c] · [map, −map a v; 0, diag(scale) v] = [Q, qc].
         let mut q = DMat::zeros(n, r + m);
         q.columns_mut(0, r).copy_from(&self.q);
@@ -1179,6 +1194,48 @@ mod tests {
             let (a, b) = (fits.rms_with(&added), fresh(&wide));
             assert!((a - b).abs() < 1e-9 * b, "{a} vs {b}");
         }
+    }
+
+    /// The fits a search derives from its base's fit — extended by columns, downdated for
+    /// held-out rows — against fresh fits of the same model.
+    #[test]
+    fn extended_and_downdated_fits_equal_fresh_fits() {
+        let n = 300;
+        let (x, y, w) = problem(n);
+        let fresh_of = |x: &DMat, w: &DVec| Projector::fit(x, &y, w);
+        let agree = |a: &Projector, b: &Projector| {
+            assert_eq!(a.rank(), b.rank());
+            assert_eq!(a.dof(), b.dof());
+            assert!(
+                (a.rss_w() - b.rss_w()).abs() < 1e-10 * b.rss_w(),
+                "{} vs {}",
+                a.rss_w(),
+                b.rss_w()
+            );
+            // The same span: a candidate's increment, and its coefficients on the design.
+            let c = DMat::from_fn(n, 1, |i, _| ((i * 37) % 11) as f64);
+            let (ia, ib) = (a.increment(&c), b.increment(&c));
+            assert!((ia.delta_rss - ib.delta_rss).abs() < 1e-9 * ib.delta_rss.max(1e-300));
+            let col = c.column(0).into_owned();
+            let (fa, fb) = (
+                x.columns(0, a.design_columns()) * a.coefficients(&col),
+                x.columns(0, b.design_columns()) * b.coefficients(&col),
+            );
+            let wt = |v: DVec| v.component_mul(&a.w);
+            assert!((wt(fa) - wt(fb)).norm() < 1e-9 * col.norm());
+        };
+        // Columns 3..6 appended to the fit of 0..3; column 4 is a combination of 1 and 2.
+        let base = x.columns(0, 3).into_owned();
+        let extended = Projector::fit(&base, &y, &w).extended_to(&x);
+        agree(&extended, &fresh_of(&x, &w));
+        // Every third row held out.
+        let rows: Vec<usize> = (0..n).step_by(3).collect();
+        let mut w0 = w.clone();
+        for &i in &rows {
+            w0[i] = 0.0;
+        }
+        let downdated = Projector::fit(&x, &y, &w).without_rows(&rows, &y);
+        agree(&downdated, &fresh_of(&x, &w0));
     }
 
     #[test]
