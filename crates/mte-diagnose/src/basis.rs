@@ -231,6 +231,40 @@ pub(crate) fn golden_section(
     0.5 * (a + b)
 }
 
+/// The rows of a variable grouped by equal value: a function of the variable takes one value
+/// per group, computed once (the scans' sines, [`crate::fit::Projector::increments_on`]).
+pub(crate) struct Groups {
+    /// The distinct values, increasing.
+    pub values: Vec<f64>,
+    /// Each row's group.
+    pub of_row: Vec<usize>,
+}
+
+impl Groups {
+    /// The groups of equal values among `values`.
+    pub fn new(values: &[f64]) -> Groups {
+        let mut order: Vec<usize> = (0..values.len()).collect();
+        order.sort_by(|&a, &b| values[a].total_cmp(&values[b]));
+        let mut distinct: Vec<f64> = Vec::new();
+        let mut of_row = vec![0; values.len()];
+        for i in order {
+            if distinct.last() != Some(&values[i]) {
+                distinct.push(values[i]);
+            }
+            of_row[i] = distinct.len() - 1;
+        }
+        Groups {
+            values: distinct,
+            of_row,
+        }
+    }
+
+    /// Values per group (rows of `m`, one per group) as values per row.
+    pub fn expand(&self, m: &DMat) -> DMat {
+        DMat::from_fn(self.of_row.len(), m.ncols(), |i, j| m[(self.of_row[i], j)])
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

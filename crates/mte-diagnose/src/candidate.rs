@@ -3,7 +3,9 @@
 
 use mte_linalg::{DMat, DVec};
 
-use crate::basis::{legendre_columns, periods_to_scan, sin_cos_columns, time_constants_to_scan};
+use crate::basis::{
+    Groups, legendre_columns, periods_to_scan, sin_cos_columns, time_constants_to_scan,
+};
 use crate::data::{Observations, VariableKind};
 use crate::term::{Family, Quantity, Summary, Term};
 
@@ -224,21 +226,27 @@ impl SlotEffect {
     /// The effect of the error `g(s)` whose basis functions `basis` evaluates on the axis
     /// coordinates `s` (one column per basis function); reference poses included.
     fn modulated(&self, values: &[f64], basis: &dyn Fn(&[f64]) -> DMat) -> DMat {
-        let n = values.len();
+        self.modulated_by(&basis(&self.positions(values)))
+    }
+
+    /// The axis coordinates the basis of an error is evaluated at: the rows' `values`, then the
+    /// reference poses' (one basis over rows and references together, so a range-normalised
+    /// basis, Legendre, is the same function at both).
+    fn positions(&self, values: &[f64]) -> Vec<f64> {
         match &self.reference {
-            None => {
-                let m = basis(values);
-                DMat::from_fn(n, m.ncols(), |i, j| self.column[i] * m[(i, j)])
-            }
-            Some((r, s_ref)) => {
-                // One basis over rows and references together, so a range-normalised basis
-                // (Legendre) is the same function at both.
-                let all: Vec<f64> = values.iter().chain(s_ref.iter()).copied().collect();
-                let m = basis(&all);
-                DMat::from_fn(n, m.ncols(), |i, j| {
-                    self.column[i] * m[(i, j)] + r[i] * m[(n + i, j)]
-                })
-            }
+            None => values.to_vec(),
+            Some((_, s_ref)) => values.iter().chain(s_ref.iter()).copied().collect(),
+        }
+    }
+
+    /// [`SlotEffect::modulated`] given the basis `m` at [`SlotEffect::positions`].
+    fn modulated_by(&self, m: &DMat) -> DMat {
+        let n = self.column.len();
+        match &self.reference {
+            None => DMat::from_fn(n, m.ncols(), |i, j| self.column[i] * m[(i, j)]),
+            Some((r, _)) => DMat::from_fn(n, m.ncols(), |i, j| {
+                self.column[i] * m[(i, j)] + r[i] * m[(n + i, j)]
+            }),
         }
     }
 }
@@ -367,10 +375,12 @@ pub fn physical_effects(
                         slot.quantity,
                     );
                     let separated_by = slot.separated_by.clone();
+                    // The sines at each distinct position once (repeated runs and cycles).
+                    let groups = Groups::new(&effect.positions(&values));
                     let make = move |p: f64, rows: Option<&[usize]>| {
                         let basis = |s: &[f64]| sin_cos_columns(s, p);
                         let cols = match rows {
-                            None => effect.modulated(&values, &basis),
+                            None => effect.modulated_by(&groups.expand(&basis(&groups.values))),
                             Some(rows) => effect
                                 .select_rows(rows)
                                 .modulated(&pick(&values, rows), &basis),

@@ -13,8 +13,8 @@ use serde::Serialize;
 use crate::candidate::Candidate;
 use crate::data::Observations;
 use crate::fit::{
-    Folds, Increment, Projector, SEPARABILITY_TOLERANCE, Solution, design, max_abs, rms,
-    separable_columns, solve, weighted_products, whitening,
+    Directions, Folds, Increment, Projector, SEPARABILITY_TOLERANCE, Solution, block_grams, design,
+    max_abs, rms, separable_columns, solve, weighted_products, whitened_r, whitening,
 };
 use crate::structure::{StructureTest, structure_tests};
 use crate::term::{Estimate, Family, Quantity, Summary, Term};
@@ -328,7 +328,7 @@ pub fn diagnose(
     check_params(params)?;
     let n = obs.len();
     let w = whitening(obs);
-    let (base, base_not_separable) = separable_base(base, &w);
+    let (base, base_not_separable, full_fit) = separable_base(base, &obs.values, &w);
     let base_width: usize = base.iter().map(Term::width).sum();
     let needed = base_width + 2 * params.folds.max(params.outer_folds) + 2;
     if n < needed {
@@ -371,8 +371,27 @@ pub fn diagnose(
     let x_base = design(&base_s.iter().collect::<Vec<_>>(), n_search);
     // The base's fit on the searched observations: the full search's start, and the outer
     // folds' after downdating their held-out rows.
-    let base_fit = Projector::fit(&x_base, &obs_s.values, &w_s);
-    let pool = Pool::new(obs_s, candidates_s, base_s, x_base, &w_s);
+    let base_fit = match thinned {
+        Some(_) => Projector::fit(&x_base, &obs_s.values, &w_s),
+        None => full_fit,
+    };
+    // The outer folds of the honest held-out figures ([`Searcher::held_out`]).
+    let outer = (params.outer_folds >= 2).then(|| {
+        Folds::blocked(
+            obs_s,
+            &vec![true; n_search],
+            params.outer_folds,
+            params.blocks_per_fold,
+        )
+    });
+    let pool = Pool::new(
+        obs_s,
+        candidates_s,
+        base_s,
+        x_base,
+        &w_s,
+        outer.as_ref().map_or(&[][..], |o| &o.test[..]),
+    );
     let searcher = Searcher {
         obs: obs_s,
         base: base_s,
@@ -391,7 +410,7 @@ pub fn diagnose(
     // wait for the outer folds either.
     let (concluded, held_out) = rayon::join(
         || {
-            let search = searcher.search(&w_s, &folds_s, true, base_fit.clone());
+            let search = searcher.search(&w_s, &folds_s, None, base_fit.clone());
             conclude(
                 obs,
                 &base,
@@ -403,7 +422,11 @@ pub fn diagnose(
                 search,
             )
         },
-        || searcher.held_out(&w_s, &base_fit),
+        || {
+            outer
+                .as_ref()
+                .map(|outer| searcher.held_out(&w_s, &base_fit, outer))
+        },
     );
     let mut diagnosis = concluded?;
     diagnosis.held_out = held_out;
@@ -794,31 +817,39 @@ struct Pool {
     by_name: HashMap<String, usize>,
     /// Column of each variant in the variants' columns side by side (pool order).
     offsets: Vec<Vec<usize>>,
-    /// The base design's products with every variant.
-    products: BaseProducts,
+    /// The products of the base's design and the observations with every variant.
+    products: Products,
+    /// Their shares of the outer folds' test rows ([`Searcher::held_out`]).
+    fold_shares: Vec<Products>,
 }
 
-/// `Xᵀ W² C`: the base design `X` (weights `W`) against every variant's columns `C` side by
-/// side, formed once on all observations. A search scores a variant from these products and its
-/// model's basis ([`Projector::basis_products`]) instead of a pass over the
-/// observations per variant and step; an outer fold's search (weights zero on its held-out
-/// rows) subtracts those rows' share.
-#[derive(Default)]
-struct BaseProducts {
+/// `Xᵀ W² C`, `yᵀ W² C` and each variant's `Cᵀ W² C`: the base design `X` and the
+/// observations `y` (weights `W`) against every variant's columns `C` side by side, formed
+/// once on all observations. A search scores a variant from these products and its model's
+/// basis ([`Projector::increment_from_products`]) instead of a pass over the observations per
+/// variant and step; an outer fold's search (weights zero on its held-out rows) subtracts
+/// those rows' share.
+#[derive(Default, Clone)]
+struct Products {
+    /// `Xᵀ W² C` (rows: the model's design columns).
     x: DMat,
-    w: DVec,
-    a: DMat,
+    /// `yᵀ W² C`.
+    y: DVec,
+    /// `Cᵀ W² C` of each variant, in pool order.
+    gram: Vec<Vec<DMat>>,
 }
 
 impl Pool {
     /// The pool of `candidates` on `obs`, with the products of the base's design `x_base`
-    /// (weights `w`) with every variant.
+    /// and the observations (weights `w`) with every variant, as the sum of the shares of the
+    /// outer folds' test rows `outer` (none: of all rows).
     fn new(
         obs: &Observations,
         candidates: &[Box<dyn Candidate>],
         base: &[Term],
         x_base: DMat,
         w: &DVec,
+        outer: &[Vec<usize>],
     ) -> Pool {
         let n = obs.len();
         let mut variants = Vec::new();
@@ -863,14 +894,43 @@ impl Pool {
             source,
             by_name,
             offsets,
-            products: BaseProducts::default(),
+            products: Products::default(),
+            fold_shares: Vec::new(),
         };
-        let a = weighted_products(&x_base, &w.component_mul(w), None, &pool.column_blocks());
-        pool.products = BaseProducts {
-            x: x_base,
-            w: w.clone(),
-            a,
-        };
+        // The outer folds' test rows partition the observations: the products are formed per
+        // fold (a fold's search subtracts its own share) and summed.
+        let w2 = w.component_mul(w);
+        let mut group = vec![0; n];
+        for (k, rows) in outer.iter().enumerate() {
+            for &i in rows {
+                group[i] = k;
+            }
+        }
+        let blocks = pool.column_blocks();
+        let grams = block_grams(&blocks, &w2, &group, outer.len().max(1));
+        let p0 = x_base.ncols();
+        let mut xy = x_base.resize_horizontally(p0 + 1, 0.0);
+        xy.set_column(p0, &obs.values);
+        let shares: Vec<Products> = grams
+            .into_iter()
+            .enumerate()
+            .map(|(k, gram)| {
+                let a = weighted_products(&xy, &w2, outer.get(k).map(Vec::as_slice), &blocks);
+                Products {
+                    x: a.rows(0, p0).into_owned(),
+                    y: a.row(p0).transpose(),
+                    gram: pool.per_variant(gram),
+                }
+            })
+            .collect();
+        let mut all = shares[0].clone();
+        for share in &shares[1..] {
+            all.add(share, 1.0);
+        }
+        pool.products = all;
+        if shares.len() > 1 {
+            pool.fold_shares = shares;
+        }
         pool
     }
 
@@ -879,8 +939,21 @@ impl Pool {
         self.variants.iter().flatten().map(|t| &t.columns).collect()
     }
 
+    /// Values in pool order (one per variant) as the pool's nesting.
+    fn per_variant<T>(&self, flat: Vec<T>) -> Vec<Vec<T>> {
+        let mut flat = flat.into_iter();
+        self.variants
+            .iter()
+            .map(|v| {
+                v.iter()
+                    .map(|_| flat.next().expect("one per variant"))
+                    .collect()
+            })
+            .collect()
+    }
+
     /// The products of the model design `x` with every variant under weights `w`, given those
-    /// of its first columns `fixed` (rows of `Xᵀ W² C`, [`Pool::base_products`]).
+    /// of its first columns `fixed` (rows of `Xᵀ W² C`, [`Pool::search_products`]).
     fn model_products(&self, fixed: &DMat, x: &DMat, w: &DVec) -> DMat {
         let p0 = fixed.nrows();
         let extra = x.columns(p0, x.ncols() - p0).into_owned();
@@ -891,18 +964,34 @@ impl Pool {
         out
     }
 
-    /// The products of the search base's design `x` (the pool's base first, then its
-    /// completions) with every variant under weights `w`: the pool's, less the share of the
-    /// rows whose weight differs (an outer fold's held-out rows), plus the completions' rows.
-    fn base_products(&self, x: &DMat, w: &DVec) -> DMat {
-        let bp = &self.products;
-        let differ: Vec<usize> = (0..w.len()).filter(|&i| w[i] != bp.w[i]).collect();
-        let mut base = bp.a.clone();
-        if !differ.is_empty() {
-            let dw2 = DVec::from_fn(w.len(), |i, _| bp.w[i] * bp.w[i] - w[i] * w[i]);
-            base -= weighted_products(&bp.x, &dw2, Some(&differ), &self.column_blocks());
+    /// The products for a search whose base design `x` is the pool's base then its
+    /// completions, under the pool's weights `w` except on the rows of the outer fold
+    /// `held_out` (weight zero): the pool's products less that fold's share, plus the
+    /// completions' rows.
+    fn search_products(&self, x: &DMat, w: &DVec, held_out: Option<usize>) -> Products {
+        let mut products = self.products.clone();
+        if let Some(k) = held_out {
+            products.add(&self.fold_shares[k], -1.0);
         }
-        self.model_products(&base, x, w)
+        products.x = self.model_products(&products.x, x, w);
+        products
+    }
+}
+
+impl Products {
+    /// `self += sign · other`.
+    fn add(&mut self, other: &Products, sign: f64) {
+        let add = |a: &mut f64, b: f64| *a += sign * b;
+        self.x.zip_apply(&other.x, add);
+        self.y.zip_apply(&other.y, add);
+        for (g, o) in self
+            .gram
+            .iter_mut()
+            .flatten()
+            .zip(other.gram.iter().flatten())
+        {
+            g.zip_apply(o, add);
+        }
     }
 }
 
@@ -957,17 +1046,24 @@ impl Searcher<'_> {
     }
 
     /// Completes the base, then searches for causes on top of it. Observations of weight zero
-    /// take no part. `explain`: record which candidates the data cannot separate from the base
-    /// (for the report; an outer fold's search only needs its causes).
-    /// `base_fit`: the fit of the base under the weights `w`.
-    fn search(&self, w: &DVec, folds: &Folds, explain: bool, base_fit: Projector) -> SearchResult {
+    /// take no part: those of the outer fold `held_out` (`None`: the search on all data, which
+    /// also records which candidates the data cannot separate from the base, for the report;
+    /// an outer fold's search only needs its causes). `base_fit`: the fit of the base under
+    /// the weights `w`.
+    fn search(
+        &self,
+        w: &DVec,
+        folds: &Folds,
+        held_out: Option<usize>,
+        base_fit: Projector,
+    ) -> SearchResult {
         let (completed, base_fit) = self.complete(base_fit);
         let base: Vec<Term> = self.base.iter().chain(&completed).cloned().collect();
         let mut found = Searcher {
             base: &base,
             ..*self
         }
-        .search_causes(w, folds, explain, &base_fit);
+        .search_causes(w, folds, held_out, &base_fit);
         found.completed = completed;
         found
     }
@@ -1031,15 +1127,16 @@ impl Searcher<'_> {
         (done, projector)
     }
 
-    /// Forward search, then backward pruning.
+    /// Forward search, then backward pruning. `held_out` as in [`Searcher::search`];
     /// `base_fit`: the fit of the base (this searcher's) under the weights `w`.
     fn search_causes(
         &self,
         w: &DVec,
         folds: &Folds,
-        explain: bool,
+        held_out: Option<usize>,
         base_fit: &Projector,
     ) -> SearchResult {
+        let explain = held_out.is_none();
         let obs = self.obs;
         let params = self.params;
         let y = &obs.values;
@@ -1066,7 +1163,7 @@ impl Searcher<'_> {
         let mut x = design(&terms.iter().collect::<Vec<_>>(), obs.len());
         // The base's products with every variant, for this search's weights; the chosen terms'
         // rows are added at each step.
-        let base_products = self.pool.base_products(&x, w);
+        let products = self.pool.search_products(&x, w, held_out);
         // Variants whose columns a refinement changed (not the pool's: no products).
         let mut refined: std::collections::HashSet<(usize, usize)> = Default::default();
 
@@ -1075,13 +1172,19 @@ impl Searcher<'_> {
             let rss = projector.rss_w();
             // Every variant's `Qᵀ W c`, from the products; a variant a refinement changed is
             // projected directly.
-            let qc = projector.basis_products(&self.pool.model_products(&base_products, &x, w));
+            let qc = projector.basis_products(&self.pool.model_products(&products.x, &x, w));
+            let qty = projector.basis_of(y);
             let increment = |ci: usize, vi: usize, t: &Term| {
                 if refined.contains(&(ci, vi)) {
                     projector.increment(&t.columns)
                 } else {
-                    let at = self.pool.offsets[ci][vi];
-                    projector.increment_given(&t.columns, qc.columns(at, t.width()))
+                    let (at, k) = (self.pool.offsets[ci][vi], t.width());
+                    projector.increment_from_products(
+                        &products.gram[ci][vi],
+                        products.y.rows(at, k).into_owned(),
+                        qc.columns(at, k),
+                        &qty,
+                    )
                 }
             };
             let fold_fits = projector.fold_fits(folds, &x, y);
@@ -1165,17 +1268,32 @@ impl Searcher<'_> {
                     .total_cmp(&p_of(&graded[b].2))
                     .then(graded[b].2.delta_rss.total_cmp(&graded[a].2.delta_rss))
             });
-            for &g in order.iter().take(params.shortlist) {
-                let (ci, vi, inc) = &mut graded[g];
-                if p_of(inc) >= REFINE_LEVEL * params.alpha {
+            // (Independent of each other: in parallel, applied in order.)
+            let to_refine: Vec<usize> = order
+                .iter()
+                .take(params.shortlist)
+                .copied()
+                .filter(|&g| p_of(&graded[g].2) < REFINE_LEVEL * params.alpha)
+                .collect();
+            let better: Vec<Option<(Term, Increment)>> = to_refine
+                .par_iter()
+                .map(|&g| {
+                    let (ci, vi, _) = &graded[g];
+                    let score = |t: &Term| rss - projector.increment(&t.columns).delta_rss;
+                    self.candidate(*ci).refine(*vi, &score).map(|t| {
+                        let inc = projector.increment(&t.columns);
+                        (t, inc)
+                    })
+                })
+                .collect();
+            for (&g, better) in to_refine.iter().zip(better) {
+                let Some((term, better)) = better else {
                     continue;
-                }
-                let score = |t: &Term| rss - projector.increment(&t.columns).delta_rss;
-                if let Some(better) = self.candidate(*ci).refine(*vi, &score) {
-                    *inc = projector.increment(&better.columns);
-                    overrides.insert((*ci, *vi), nth_component(better, times_chosen[*ci]));
-                    refined.insert((*ci, *vi));
-                }
+                };
+                let (ci, vi, inc) = &mut graded[g];
+                *inc = better;
+                overrides.insert((*ci, *vi), nth_component(term, times_chosen[*ci]));
+                refined.insert((*ci, *vi));
             }
             let mut scored: Vec<Scored> = graded
                 .iter()
@@ -1184,12 +1302,18 @@ impl Searcher<'_> {
             scored.sort_by(|a, b| a.2.total_cmp(&b.2).then(b.3.total_cmp(&a.3)));
             let mut ranking = Vec::new();
             let mut best: Option<(usize, usize, f64)> = None; // (entry, variant, cv rms)
-            for &(ci, vi, p, share) in scored.iter().take(params.shortlist) {
+            // The held-out RMS of the significant ones (independent: in parallel).
+            let shortlisted = &scored[..scored.len().min(params.shortlist)];
+            let cvs: Vec<Option<f64>> = shortlisted
+                .par_iter()
+                .map(|&(ci, vi, p, _)| {
+                    (p < params.alpha)
+                        .then(|| fold_fits.rms_with(&variant(&overrides, ci, vi).columns))
+                })
+                .collect();
+            for (&(ci, vi, p, share), cv) in shortlisted.iter().zip(cvs) {
                 let t = variant(&overrides, ci, vi);
-                let mut cv = None;
-                if p < params.alpha {
-                    let r = fold_fits.rms_with(&t.columns);
-                    cv = Some(r);
+                if let Some(r) = cv {
                     let better = match best {
                         None => true,
                         Some((bc, bv, br)) => {
@@ -1444,23 +1568,19 @@ impl Searcher<'_> {
     }
 
     /// The outer folds: for each, the base model and the whole search on the other folds
-    /// predict it. `None` when outer folds are off. `base_fit`: the base's fit under `w`, which
+    /// predict it. `base_fit`: the base's fit under `w`, which
     /// each fold downdates for its held-out rows.
-    fn held_out(&self, w: &DVec, base_fit: &Projector) -> Option<HeldOut> {
-        let k = self.params.outer_folds;
-        if k < 2 {
-            return None;
-        }
+    fn held_out(&self, w: &DVec, base_fit: &Projector, outer: &Folds) -> HeldOut {
         let obs = self.obs;
         let n = obs.len();
-        let outer = Folds::blocked(obs, &vec![true; n], k, self.params.blocks_per_fold);
         // Per fold: (observation, base residual, diagnosed residual) of its held-out rows, and
         // the causes its search named.
         type FoldRun = (Vec<(usize, f64, f64)>, Vec<String>);
         let runs: Vec<FoldRun> = outer
             .test
             .par_iter()
-            .map(|test| {
+            .enumerate()
+            .map(|(fold, test)| {
                 let mut include = vec![true; n];
                 let mut w_train = w.clone();
                 for &i in test {
@@ -1474,27 +1594,28 @@ impl Searcher<'_> {
                     self.params.blocks_per_fold,
                 );
                 let fold_fit = base_fit.without_rows(test, &obs.values);
-                let found = self.search(&w_train, &inner, false, fold_fit);
+                let found = self.search(&w_train, &inner, Some(fold), fold_fit.clone());
+                // The fits of the training rows (the held-out ones have weight zero), extended
+                // from the fold's base fit; their predictions at the held-out rows.
                 let completed: Vec<Term> =
                     self.base.iter().chain(&found.completed).cloned().collect();
-                let base = solve(
-                    &design(&completed.iter().collect::<Vec<_>>(), n),
-                    &obs.values,
-                    &w_train,
-                );
-                let terms = Searcher {
+                let searcher = Searcher {
                     base: &completed,
                     ..*self
-                }
-                .with(&found.chosen, None);
-                let diagnosed = solve(
-                    &design(&terms.iter().collect::<Vec<_>>(), n),
-                    &obs.values,
-                    &w_train,
-                );
+                };
+                let held_out_residuals = |terms: &[Term]| -> Vec<f64> {
+                    let (x, fit) = searcher.fit_of(&fold_fit, terms);
+                    let coef = fit.coefficients(&obs.values);
+                    test.iter()
+                        .map(|&i| obs.values[i] - x.row(i).transpose().dot(&coef))
+                        .collect()
+                };
+                let base = held_out_residuals(&completed);
+                let diagnosed = held_out_residuals(&searcher.with(&found.chosen, None));
                 let residuals = test
                     .iter()
-                    .map(|&i| (i, base.residuals[i], diagnosed.residuals[i]))
+                    .enumerate()
+                    .map(|(k, &i)| (i, base[k], diagnosed[k]))
                     .collect();
                 let names = found.chosen.iter().map(|c| c.term.name.clone()).collect();
                 (residuals, names)
@@ -1510,14 +1631,14 @@ impl Searcher<'_> {
             }
             per_fold.push(names);
         }
-        Some(HeldOut {
-            folds: k,
+        HeldOut {
+            folds: outer.test.len(),
             base_rms: rms(&base),
             base_max_abs: max_abs(&base),
             diagnosed_rms: rms(&diagnosed),
             diagnosed_max_abs: max_abs(&diagnosed),
             per_fold,
-        })
+        }
     }
 }
 
@@ -2348,31 +2469,47 @@ fn keep_columns(t: Term, keep: &[usize]) -> Term {
 /// The base terms the data can separate: columns are kept in order while each adds a direction
 /// (whitened, at least [`SEPARABILITY_TOLERANCE`] of its norm outside the kept ones); a term that
 /// loses some columns keeps the others. The dropped ones are reported with what they are
-/// confounded with.
-fn separable_base(base: Vec<Term>, w: &DVec) -> (Vec<Term>, Vec<NotSeparable>) {
-    let mut basis: Vec<DVec> = Vec::new(); // orthonormal, whitened
+/// confounded with. Also returns the fit of `y` by the kept terms.
+fn separable_base(
+    base: Vec<Term>,
+    y: &DVec,
+    w: &DVec,
+) -> (Vec<Term>, Vec<NotSeparable>, Projector) {
+    // The whitened design is Q R: its columns' angles are those of R's, so the columns are
+    // separated in R's space (width², not observations × width).
+    let width = base.iter().map(Term::width).sum();
+    let r = whitened_r(
+        &design(&base.iter().collect::<Vec<_>>(), w.len()),
+        &DVec::zeros(w.len()),
+        w,
+    )
+    .0;
+    let unweighted = DVec::from_element(width, 1.0);
+    let mut basis = Directions::new(width, width); // orthonormal
     let mut kept: Vec<Term> = Vec::new();
-    let mut dropped: Vec<(Term, usize)> = Vec::new(); // (term, column)
-    for t in base {
-        let (keep, not) = separable_columns(&t.columns, w, None, &mut basis);
-        dropped.extend(not.into_iter().map(|j| (t.clone(), j)));
+    let mut dropped: Vec<(usize, usize)> = Vec::new(); // (term, column)
+    let mut at = 0;
+    for (k, t) in base.iter().enumerate() {
+        let block = r.columns(at, t.width()).into_owned();
+        at += t.width();
+        let (keep, not) = separable_columns(&block, &unweighted, None, &mut basis);
+        dropped.extend(not.into_iter().map(|j| (k, j)));
         if !keep.is_empty() {
-            kept.push(keep_columns(t, &keep));
+            kept.push(keep_columns(t.clone(), &keep));
         }
     }
     let x = design(&kept.iter().collect::<Vec<_>>(), w.len());
-    let fit = (!dropped.is_empty()).then(|| Projector::new(&x, w, &DVec::zeros(w.len())));
+    let fit = Projector::fit(&x, y, w);
     let not_separable = dropped
-        .into_iter()
-        .map(|(t, j)| {
+        .par_iter()
+        .map(|&(k, j)| {
+            let t = &base[k];
             let column = Term {
                 columns: t.columns.columns(j, 1).into_owned(),
                 ..t.clone()
             };
             let mut out = Vec::new();
-            if let Some(fit) = &fit {
-                record_not_separable(&mut out, &column, &kept, &x, fit);
-            }
+            record_not_separable(&mut out, &column, &kept, &x, &fit);
             let mut ns = out.pop().unwrap_or(NotSeparable {
                 name: String::new(),
                 label: t.label.clone(),
@@ -2383,7 +2520,7 @@ fn separable_base(base: Vec<Term>, w: &DVec) -> (Vec<Term>, Vec<NotSeparable>) {
             ns
         })
         .collect();
-    (kept, not_separable)
+    (kept, not_separable, fit)
 }
 
 fn quality(obs: &Observations, sol: &Solution, cv: &DVec) -> FitQuality {

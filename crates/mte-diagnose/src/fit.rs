@@ -7,6 +7,7 @@ use mte_linalg::bridge::{as_faer, product};
 use mte_linalg::nalgebra::{DMatrixView, Dyn, SymmetricEigen};
 use mte_linalg::{DMat, DVec};
 
+use crate::basis::Groups;
 use crate::data::Observations;
 use crate::term::Term;
 
@@ -150,7 +151,7 @@ fn reciprocal_norms(norms: impl ExactSizeIterator<Item = f64>) -> DVec {
 /// scale factors: the design is whitened row by row into the blocks of a streamed QR (faer's
 /// blocked Householder) with the observations as a last column, so a long record is never
 /// copied whole.
-fn whitened_r(x: &DMat, y: &DVec, w: &DVec) -> (DMat, DVec, DVec) {
+pub(crate) fn whitened_r(x: &DMat, y: &DVec, w: &DVec) -> (DMat, DVec, DVec) {
     let (n, p) = x.shape();
     let scale = reciprocal_norms((0..p).map(|j| {
         x.column(j)
@@ -480,35 +481,81 @@ fn beyond(q: &DMat, cw: DMat) -> Beyond {
     Beyond { a, v, q }
 }
 
+/// Orthonormal (whitened) directions, grown block by block ([`separable_columns`]).
+pub(crate) struct Directions {
+    m: DMat,
+    len: usize,
+}
+
+impl Directions {
+    /// No directions yet, room for `capacity` of length `n`.
+    pub fn new(n: usize, capacity: usize) -> Directions {
+        Directions {
+            m: DMat::zeros(n, capacity),
+            len: 0,
+        }
+    }
+
+    fn push(&mut self, v: &DVec) {
+        if self.len == self.m.ncols() {
+            let grown = (2 * self.len).max(self.len + 1);
+            self.m = std::mem::take(&mut self.m).resize_horizontally(grown, 0.0);
+        }
+        self.m.column_mut(self.len).copy_from(v);
+        self.len += 1;
+    }
+
+    /// `b` less its components along the first `len` directions.
+    fn project_out(&self, len: usize, b: &mut DMat) {
+        if len > 0 {
+            let basis = as_faer(&self.m).subcols(0, len);
+            let coef = product(basis.transpose(), as_faer(b));
+            *b -= product(basis, as_faer(&coef));
+        }
+    }
+}
+
 /// Splits the nonzero columns of `c` into those that keep at least [`SEPARABILITY_TOLERANCE`]
 /// of their whitened (by `w`) norm once the span of the orthonormal `q` and the directions in
-/// `kept` are projected out (twice, for rounding) — their directions are appended to `kept` —
-/// and those that do not: `(separable, not separable)` column indices.
+/// `kept` are projected out (twice, for rounding: the block at once, then column by column
+/// against the block's own new directions) — their directions are appended to `kept` — and
+/// those that do not: `(separable, not separable)` column indices.
 pub(crate) fn separable_columns(
     c: &DMat,
     w: &DVec,
     q: Option<&DMat>,
-    kept: &mut Vec<DVec>,
+    kept: &mut Directions,
 ) -> (Vec<usize>, Vec<usize>) {
     let (mut separable, mut not) = (Vec::new(), Vec::new());
-    for (j, column) in c.column_iter().enumerate() {
-        let cw = column.component_mul(w);
-        let norm = cw.norm();
-        if norm == 0.0 {
-            continue;
+    let nonzero: Vec<(usize, f64)> = c
+        .column_iter()
+        .enumerate()
+        .map(|(j, column)| (j, column.component_mul(w).norm()))
+        .filter(|&(_, norm)| norm > 0.0)
+        .collect();
+    let mut block = DMat::from_fn(c.nrows(), nonzero.len(), |i, k| {
+        let (j, norm) = nonzero[k];
+        c[(i, j)] * w[i] / norm
+    });
+    let before = kept.len;
+    for _ in 0..2 {
+        if let Some(q) = q.filter(|q| q.ncols() > 0) {
+            let coef = product(as_faer(q).transpose(), as_faer(&block));
+            block -= product(as_faer(q), as_faer(&coef));
         }
-        let mut r = cw / norm;
+        kept.project_out(before, &mut block);
+    }
+    for (k, &(j, _)) in nonzero.iter().enumerate() {
+        let mut r = block.column(k).into_owned();
         for _ in 0..2 {
-            if let Some(q) = q {
-                r -= q * q.tr_mul(&r);
-            }
-            for e in kept.iter() {
-                r.axpy(-e.dot(&r), e, 1.0);
+            for e in before..kept.len {
+                let e = kept.m.column(e);
+                r.axpy(-e.dot(&r), &e, 1.0);
             }
         }
         let left = r.norm();
         if left >= SEPARABILITY_TOLERANCE {
-            kept.push(r / left);
+            kept.push(&(r / left));
             separable.push(j);
         } else {
             not.push(j);
@@ -737,7 +784,7 @@ impl Projector {
     /// columns adds to the model, by the rule the diagnosis applies to its base.
     pub fn separable_columns(&self, c: &DMat) -> Vec<usize> {
         let q = (self.q.ncols() > 0).then_some(&self.q);
-        separable_columns(c, &self.w, q, &mut Vec::new()).0
+        separable_columns(c, &self.w, q, &mut Directions::new(c.nrows(), c.ncols())).0
     }
 
     /// Whitened `c` with the current model projected out.
@@ -808,6 +855,68 @@ impl Projector {
         out
     }
 
+    /// [`Projector::increments`] of `count` candidates that are functions of one variable:
+    /// candidate `k` is `basis(k, v)` evaluated on the variable's distinct values `v`
+    /// (`groups`, of this projector's rows). Its products with the model and the residuals are
+    /// sums over the rows of each value, formed once: a scan over repeated positions (runs over
+    /// the same targets, program cycles) costs the distinct positions, not the observations.
+    pub fn increments_on(
+        &self,
+        groups: &Groups,
+        count: usize,
+        basis: impl Fn(usize, &[f64]) -> DMat,
+    ) -> Vec<Increment> {
+        let n = self.w.len();
+        assert_eq!(groups.of_row.len(), n, "one group per row of the projector");
+        let (m, r) = (groups.values.len(), self.q.ncols());
+        // Σ w², Σ w r_w and Σ w q over each value's rows.
+        let mut s2 = DVec::zeros(m);
+        let mut sr = DVec::zeros(m);
+        for (i, &u) in groups.of_row.iter().enumerate() {
+            s2[u] += self.w[i] * self.w[i];
+            sr[u] += self.w[i] * self.rw[i];
+        }
+        let mut qs = DMat::zeros(m, r);
+        for j in 0..r {
+            let (from, to) = (self.q.column(j), &mut qs.column_mut(j));
+            for (i, &u) in groups.of_row.iter().enumerate() {
+                to[u] += self.w[i] * from[i];
+            }
+        }
+        let batch_columns = (BATCH_VALUES / m.max(1)).clamp(1, BATCH_COLUMNS);
+        let mut out = Vec::with_capacity(count);
+        let mut next = 0;
+        while next < count {
+            let mut batch = Vec::new();
+            let mut width = 0;
+            while next < count && (batch.is_empty() || width < batch_columns) {
+                let c = basis(next, &groups.values);
+                width += c.ncols();
+                batch.push(c);
+                next += 1;
+            }
+            let mut cs = DMat::zeros(m, width);
+            let mut at = 0;
+            for c in &batch {
+                cs.columns_mut(at, c.ncols()).copy_from(c);
+                at += c.ncols();
+            }
+            let a = (r > 0).then(|| tr_mul(&qs, &cs));
+            let mut at = 0;
+            for c in &batch {
+                let k = c.ncols();
+                let mut weighted = c.clone();
+                for mut column in weighted.column_iter_mut() {
+                    column.component_mul_assign(&s2);
+                }
+                let ak = a.as_ref().map(|a| a.columns(at, k));
+                out.push(self.increment_from(c.tr_mul(&weighted), c.tr_mul(&sr), ak));
+                at += k;
+            }
+        }
+        out
+    }
+
     /// The folds' fits of the projector's model (design `x`, observations `y`), on its basis.
     pub fn fold_fits<'a>(&'a self, folds: &'a Folds, x: &'a DMat, y: &'a DVec) -> FoldFits<'a> {
         FoldFits::with_basis(
@@ -828,18 +937,42 @@ impl Projector {
         tr_mul(&self.map, xtc)
     }
 
-    /// [`Projector::increment`] of `c` given `a = Qᵀ W c` ([`Projector::basis_products`]).
-    pub fn increment_given(&self, c: &DMat, a: DMatView<'_>) -> Increment {
-        let mut cw = c.clone();
-        for mut column in cw.column_iter_mut() {
-            column.component_mul_assign(&self.w);
+    /// `Qᵀ W y` of the observations `y` the projector's residuals are of: with it, a candidate's
+    /// increment needs no pass over the observations ([`Projector::increment_from_products`]).
+    pub fn basis_of(&self, y: &DVec) -> DVec {
+        if self.q.ncols() == 0 {
+            return DVec::zeros(0);
         }
-        self.increment_of(cw.as_view(), (self.q.ncols() > 0).then_some(a))
+        self.q.tr_mul(&y.component_mul(&self.w))
+    }
+
+    /// [`Projector::increment`] of a candidate `C` from its products alone: `g = CᵀW²C`,
+    /// `cy = CᵀW²y`, `a = QᵀWC` ([`Projector::basis_products`]) and `qty = QᵀWy`
+    /// ([`Projector::basis_of`]) — its product with the residuals is `cy − aᵀ qty`.
+    pub fn increment_from_products(
+        &self,
+        g: &DMat,
+        cy: DVec,
+        a: DMatView<'_>,
+        qty: &DVec,
+    ) -> Increment {
+        let b = if self.q.ncols() > 0 {
+            cy - a.tr_mul(qty)
+        } else {
+            cy
+        };
+        self.increment_from(g.clone(), b, (self.q.ncols() > 0).then_some(a))
     }
 
     /// The increment of whitened candidate columns `cw` with `a = Qᵀ cw` (`None`: no model).
     fn increment_of(&self, cw: DMatView<'_>, a: Option<DMatView<'_>>) -> Increment {
-        let k = cw.ncols();
+        self.increment_from(cw.tr_mul(&cw), cw.tr_mul(&self.rw), a)
+    }
+
+    /// The increment of a candidate `C` given its whitened products: `g = CᵀW²C`,
+    /// `b = CᵀW r_w` and `a = Qᵀ W C` (`None`: no model).
+    fn increment_from(&self, mut g: DMat, mut b: DVec, a: Option<DMatView<'_>>) -> Increment {
+        let k = g.ncols();
         let none = Increment {
             delta_rss: 0.0,
             new_rank: 0,
@@ -848,12 +981,10 @@ impl Projector {
         if k == 0 {
             return none;
         }
-        let norms: Vec<f64> = cw.column_iter().map(|c| c.norm()).collect();
+        let norms: Vec<f64> = (0..k).map(|i| g[(i, i)].sqrt()).collect();
         if norms.iter().any(|n| n.is_nan() || *n <= 0.0) {
             return none;
         }
-        let mut g = cw.tr_mul(&cw);
-        let mut b = cw.tr_mul(&self.rw);
         if let Some(a) = a {
             g -= a.tr_mul(&a);
             b -= a.tr_mul(&self.qtr);
@@ -929,6 +1060,39 @@ fn kept_directions(pairs: Vec<(f64, DVec)>) -> Vec<(f64, DVec)> {
     pairs
         .into_iter()
         .filter(|&(l, _)| l > 1e-12 && l > 1e-12 * lambda_max)
+        .collect()
+}
+
+/// Each block's Gram `cᵀ diag(w2) c` over the rows of each group (`group[i]` < `groups`: the
+/// group of row `i`), in one pass over the columns: `[group][block]`. Blocks in parallel.
+pub(crate) fn block_grams(
+    column_blocks: &[&DMat],
+    w2: &DVec,
+    group: &[usize],
+    groups: usize,
+) -> Vec<Vec<DMat>> {
+    use rayon::prelude::*;
+    let per_block: Vec<Vec<DMat>> = column_blocks
+        .par_iter()
+        .map(|c| {
+            let k = c.ncols();
+            let mut acc = vec![0.0; groups * k * k];
+            for (i, &g) in group.iter().enumerate() {
+                let at = g * k * k;
+                for a in 0..k {
+                    let ca = c[(i, a)] * w2[i];
+                    for b in a..k {
+                        acc[at + a * k + b] += ca * c[(i, b)];
+                    }
+                }
+            }
+            (0..groups)
+                .map(|g| DMat::from_fn(k, k, |a, b| acc[g * k * k + a.min(b) * k + a.max(b)]))
+                .collect()
+        })
+        .collect();
+    (0..groups)
+        .map(|g| per_block.iter().map(|b| b[g].clone()).collect())
         .collect()
 }
 
@@ -1236,6 +1400,68 @@ mod tests {
         }
         let downdated = Projector::fit(&x, &y, &w).without_rows(&rows, &y);
         agree(&downdated, &fresh_of(&x, &w0));
+    }
+
+    #[test]
+    fn increments_from_groups_and_from_products_equal_direct_ones() {
+        let n = 300;
+        let (x, y, w) = problem(n);
+        let fit = Projector::fit(&x.columns(0, 4).into_owned(), &y, &w);
+        // A variable with repeated values (targets visited by several runs).
+        let v: Vec<f64> = (0..n).map(|i| ((i * 7) % 23) as f64 * 3.7).collect();
+        let periods = [11.0, 19.5, 40.0];
+        let direct = fit.increments(periods.len(), |k| {
+            Cow::Owned(crate::basis::sin_cos_columns(&v, periods[k]))
+        });
+        let groups = Groups::new(&v);
+        assert_eq!(groups.values.len(), 23);
+        let grouped = fit.increments_on(&groups, periods.len(), |k, values| {
+            crate::basis::sin_cos_columns(values, periods[k])
+        });
+        for (d, g) in direct.iter().zip(&grouped) {
+            assert_eq!(d.new_rank, g.new_rank);
+            assert!((d.delta_rss - g.delta_rss).abs() < 1e-9 * d.delta_rss);
+            assert!((d.separability - g.separability).abs() < 1e-9);
+        }
+        // From the products alone: CᵀW²C, CᵀW²y, QᵀWC and QᵀWy.
+        let c = crate::basis::sin_cos_columns(&v, periods[1]);
+        let w2 = w.component_mul(&w);
+        let gram = &block_grams(&[&c], &w2, &vec![0; n], 1)[0][0];
+        let cy = weighted_products(
+            &DMat::from_column_slice(n, 1, y.as_slice()),
+            &w2,
+            None,
+            &[&c],
+        )
+        .row(0)
+        .transpose();
+        let a = fit.basis_products(&weighted_products(
+            &x.columns(0, 4).into_owned(),
+            &w2,
+            None,
+            &[&c],
+        ));
+        let from_products = fit.increment_from_products(gram, cy, a.as_view(), &fit.basis_of(&y));
+        let direct = fit.increment(&c);
+        assert_eq!(from_products.new_rank, direct.new_rank);
+        assert!((from_products.delta_rss - direct.delta_rss).abs() < 1e-9 * direct.delta_rss);
+    }
+
+    #[test]
+    fn columns_separated_in_the_space_of_r_as_in_the_observations() {
+        let n = 300;
+        let (x, y, w) = problem(n);
+        let mut direct = Directions::new(n, 0);
+        let (r, _, _) = whitened_r(&x, &y, &w);
+        let mut in_r = Directions::new(6, 6);
+        let ones = DVec::from_element(6, 1.0);
+        // Blocks [0, 1], [2, 3], [4, 5]: column 4 is a combination of 1 and 2.
+        for at in [0, 2, 4] {
+            let a = separable_columns(&x.columns(at, 2).into_owned(), &w, None, &mut direct);
+            let b = separable_columns(&r.columns(at, 2).into_owned(), &ones, None, &mut in_r);
+            assert_eq!(a, b);
+        }
+        assert_eq!(in_r.len, 5);
     }
 
     #[test]

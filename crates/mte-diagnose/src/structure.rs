@@ -6,7 +6,7 @@ use std::borrow::Cow;
 use mte_linalg::{DMat, DVec, stats};
 use serde::Serialize;
 
-use crate::basis::{legendre_columns, periods_to_scan, sin_cos_columns};
+use crate::basis::{Groups, legendre_columns, periods_to_scan, sin_cos_columns};
 use crate::data::{Observations, Variable, VariableKind};
 use crate::fit::{Projector, select, select_rows};
 use rayon::prelude::*;
@@ -154,9 +154,11 @@ pub(crate) fn structure_tests(
                         None => (&rows[ch], &projectors[ch]),
                     };
                     let on_channel: Vec<f64> = scan_rows.iter().map(|&i| scan_values[i]).collect();
-                    let increments = scan_projector.increments(periods.len(), |k| {
-                        Cow::Owned(sin_cos_columns(&on_channel, periods[k]))
-                    });
+                    let increments = scan_projector.increments_on(
+                        &Groups::new(&on_channel),
+                        periods.len(),
+                        |k, values| sin_cos_columns(values, periods[k]),
+                    );
                     let mut best: Option<(f64, f64)> = None;
                     for (&p, inc) in periods.iter().zip(increments) {
                         if best.is_none_or(|(_, d)| inc.delta_rss > d) {
