@@ -821,37 +821,20 @@ impl Projector {
         count: usize,
         candidate: impl Fn(usize) -> Cow<'a, DMat>,
     ) -> Vec<Increment> {
-        let n = self.w.len();
-        let batch_columns = (BATCH_VALUES / n.max(1)).clamp(1, BATCH_COLUMNS);
         let mut out = Vec::with_capacity(count);
-        let mut next = 0;
-        while next < count {
-            let mut batch = Vec::new();
-            let mut width = 0;
-            while next < count && (batch.is_empty() || width < batch_columns) {
-                let c = candidate(next);
-                width += c.ncols();
-                batch.push(c);
-                next += 1;
-            }
-            let mut cw = DMat::zeros(n, width);
-            let mut at = 0;
-            for c in &batch {
-                cw.columns_mut(at, c.ncols()).copy_from(c.as_ref());
-                at += c.ncols();
-            }
+        in_batches(count, self.w.len(), candidate, |batch, mut cw| {
             for mut column in cw.column_iter_mut() {
                 column.component_mul_assign(&self.w);
             }
             let a = (self.q.ncols() > 0).then(|| tr_mul(&self.q, &cw));
             let mut at = 0;
-            for c in &batch {
+            for c in batch {
                 let k = c.ncols();
                 let ak = a.as_ref().map(|a| a.columns(at, k));
                 out.push(self.increment_of(cw.columns(at, k), ak));
                 at += k;
             }
-        }
+        });
         out
     }
 
@@ -883,29 +866,14 @@ impl Projector {
                 to[u] += self.w[i] * from[i];
             }
         }
-        let batch_columns = (BATCH_VALUES / m.max(1)).clamp(1, BATCH_COLUMNS);
         let mut out = Vec::with_capacity(count);
-        let mut next = 0;
-        while next < count {
-            let mut batch = Vec::new();
-            let mut width = 0;
-            while next < count && (batch.is_empty() || width < batch_columns) {
-                let c = basis(next, &groups.values);
-                width += c.ncols();
-                batch.push(c);
-                next += 1;
-            }
-            let mut cs = DMat::zeros(m, width);
-            let mut at = 0;
-            for c in &batch {
-                cs.columns_mut(at, c.ncols()).copy_from(c);
-                at += c.ncols();
-            }
+        let values = |k: usize| Cow::Owned(basis(k, &groups.values));
+        in_batches(count, m, values, |batch, cs| {
             let a = (r > 0).then(|| tr_mul(&qs, &cs));
             let mut at = 0;
-            for c in &batch {
+            for c in batch {
                 let k = c.ncols();
-                let mut weighted = c.clone();
+                let mut weighted = c.clone().into_owned();
                 for mut column in weighted.column_iter_mut() {
                     column.component_mul_assign(&s2);
                 }
@@ -913,7 +881,7 @@ impl Projector {
                 out.push(self.increment_from(c.tr_mul(&weighted), c.tr_mul(&sr), ak));
                 at += k;
             }
-        }
+        });
         out
     }
 
@@ -1061,6 +1029,38 @@ fn kept_directions(pairs: Vec<(f64, DVec)>) -> Vec<(f64, DVec)> {
         .into_iter()
         .filter(|&(l, _)| l > 1e-12 && l > 1e-12 * lambda_max)
         .collect()
+}
+
+/// Candidates `make(0..count)` (of `rows` rows) in batches of about [`BATCH_COLUMNS`] columns
+/// (fewer for long columns), built one batch at a time: `each(blocks, their columns side by
+/// side)`.
+fn in_batches<'a>(
+    count: usize,
+    rows: usize,
+    make: impl Fn(usize) -> Cow<'a, DMat>,
+    mut each: impl FnMut(&[Cow<'a, DMat>], DMat),
+) {
+    let batch_columns = (BATCH_VALUES / rows.max(1)).clamp(1, BATCH_COLUMNS);
+    let mut next = 0;
+    while next < count {
+        let mut batch = Vec::new();
+        let mut width = 0;
+        while next < count && (batch.is_empty() || width < batch_columns) {
+            let c = make(next);
+            width += c.ncols();
+            batch.push(c);
+            next += 1;
+        }
+        let mut side_by_side = DMat::zeros(rows, width);
+        let mut at = 0;
+        for c in &batch {
+            side_by_side
+                .columns_mut(at, c.ncols())
+                .copy_from(c.as_ref());
+            at += c.ncols();
+        }
+        each(&batch, side_by_side);
+    }
 }
 
 /// Each block's Gram `cᵀ diag(w2) c` over the rows of each group (`group[i]` < `groups`: the
