@@ -328,7 +328,12 @@ pub fn diagnose(
     check_params(params)?;
     let n = obs.len();
     let w = whitening(obs);
-    let (base, base_not_separable, full_fit) = separable_base(base, &obs.values, &w);
+    // A long record is searched on an evenly thinned copy; what it finds is fitted to all.
+    let thinned =
+        (n > params.search_rows).then(|| thin_rows(&obs.acquisition_order(), params.search_rows));
+    // The base's fit on all observations is the search's start unless the record is thinned.
+    let (base, base_not_separable, full_fit) =
+        separable_base(base, &obs.values, &w, thinned.is_none());
     let base_width: usize = base.iter().map(Term::width).sum();
     let needed = base_width + 2 * params.folds.max(params.outer_folds) + 2;
     if n < needed {
@@ -337,9 +342,6 @@ pub fn diagnose(
             needed,
         });
     }
-    // A long record is searched on an evenly thinned copy; what it finds is fitted to all.
-    let thinned =
-        (n > params.search_rows).then(|| thin_rows(&obs.acquisition_order(), params.search_rows));
     let n_search = thinned.as_ref().map_or(n, Vec::len);
     // Every variant's design is kept for the search: refuse before allocating what the machine
     // cannot hold.
@@ -371,9 +373,9 @@ pub fn diagnose(
     let x_base = design(&base_s.iter().collect::<Vec<_>>(), n_search);
     // The base's fit on the searched observations: the full search's start, and the outer
     // folds' after downdating their held-out rows.
-    let base_fit = match thinned {
-        Some(_) => Projector::fit(&x_base, &obs_s.values, &w_s),
-        None => full_fit,
+    let base_fit = match full_fit.filter(|_| thinned.is_none()) {
+        Some(fit) => fit,
+        None => Projector::fit(&x_base, &obs_s.values, &w_s),
     };
     // The outer folds of the honest held-out figures ([`Searcher::held_out`]).
     let outer = (params.outer_folds >= 2).then(|| {
@@ -2469,12 +2471,14 @@ fn keep_columns(t: Term, keep: &[usize]) -> Term {
 /// The base terms the data can separate: columns are kept in order while each adds a direction
 /// (whitened, at least [`SEPARABILITY_TOLERANCE`] of its norm outside the kept ones); a term that
 /// loses some columns keeps the others. The dropped ones are reported with what they are
-/// confounded with. Also returns the fit of `y` by the kept terms.
+/// confounded with. Also returns the fit of `y` by the kept terms when `want_fit` (it is made
+/// anyway when a column is dropped, to say what it is confounded with).
 fn separable_base(
     base: Vec<Term>,
     y: &DVec,
     w: &DVec,
-) -> (Vec<Term>, Vec<NotSeparable>, Projector) {
+    want_fit: bool,
+) -> (Vec<Term>, Vec<NotSeparable>, Option<Projector>) {
     // The whitened design is Q R: its columns' angles are those of R's, so the columns are
     // separated in R's space (width², not observations × width).
     let width = base.iter().map(Term::width).sum();
@@ -2499,7 +2503,7 @@ fn separable_base(
         }
     }
     let x = design(&kept.iter().collect::<Vec<_>>(), w.len());
-    let fit = Projector::fit(&x, y, w);
+    let fit = (want_fit || !dropped.is_empty()).then(|| Projector::fit(&x, y, w));
     let not_separable = dropped
         .par_iter()
         .map(|&(k, j)| {
@@ -2509,7 +2513,8 @@ fn separable_base(
                 ..t.clone()
             };
             let mut out = Vec::new();
-            record_not_separable(&mut out, &column, &kept, &x, &fit);
+            let fit = fit.as_ref().expect("fitted when a column is dropped");
+            record_not_separable(&mut out, &column, &kept, &x, fit);
             let mut ns = out.pop().unwrap_or(NotSeparable {
                 name: String::new(),
                 label: t.label.clone(),

@@ -743,7 +743,7 @@ impl Projector {
         if self.q.ncols() == 0 {
             return DVec::zeros(self.map.nrows());
         }
-        &self.map * self.q.tr_mul(&c.component_mul(&self.w))
+        &self.map * self.basis_of(c)
     }
 
     /// Columns of the model's design.

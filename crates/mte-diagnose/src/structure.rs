@@ -40,13 +40,13 @@ impl StructureTest {
 }
 
 /// Runs every structure test on the residuals `r` of the model whose design is `x` and fit
-/// `fit` ([`Projector::fit`]). On a long
+/// `projector` ([`Projector::fit`]). On a long
 /// record the period scans choose their period on the observations `scan_rows` (evenly thinned)
 /// and test it on all; the Bonferroni factor counts the whole scan either way.
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn structure_tests(
     obs: &Observations,
-    fit: &Projector,
+    projector: &Projector,
     x: &DMat,
     r: &DVec,
     w: &DVec,
@@ -54,7 +54,6 @@ pub(crate) fn structure_tests(
     dof: usize,
     scan_rows: Option<&[usize]>,
 ) -> Vec<StructureTest> {
-    let projector = fit;
     // Where the period scans run: all observations, or the thinned ones.
     let thin = scan_rows.map(|rows| {
         (
