@@ -602,8 +602,11 @@ fn conclude(
                 amp.uncertainty = (amp.uncertainty.powi(2) + spread).sqrt();
                 amp.text = amp.quantity.format(amp.value, amp.uncertainty);
             }
+            // The best few are named; the spread above takes them all.
+            const NAMED: usize = 3;
             let others: Vec<String> = modes
                 .iter()
+                .take(NAMED)
                 .map(|m| {
                     format!(
                         "{} (Δχ² = {:.1}, amplitude {})",
@@ -621,7 +624,7 @@ fn conclude(
                     )
                 })
                 .collect();
-            f.alternatives.extend(modes.iter().map(|m| {
+            f.alternatives.extend(modes.iter().take(NAMED).map(|m| {
                 format!(
                     "{} at a period of {}",
                     f.name,
@@ -632,11 +635,15 @@ fn conclude(
                         .unwrap_or_default()
                 )
             }));
+            let more = match modes.len().saturating_sub(NAMED) {
+                0 => String::new(),
+                k => format!(" and {k} more"),
+            };
             ambiguity_notes.push(format!(
-                "the period of {} is ambiguous with these positions: {} fit{} about as well as {} (Δχ² < {MODE_CHI2}); its amplitude's uncertainty includes their spread; positions at a finer or different spacing would tell them apart",
+                "the period of {} is ambiguous with these positions: {}{more} fit{} about as well as {} (Δχ² < {MODE_CHI2}); its amplitude's uncertainty includes their spread; positions at a finer or different spacing would tell them apart",
                 f.name,
                 others.join(", "),
-                if others.len() == 1 { "s" } else { "" },
+                if modes.len() == 1 { "s" } else { "" },
                 h.text,
             ));
         }
@@ -1213,10 +1220,12 @@ impl Searcher<'_> {
                 .iter()
                 .map(|&ci| self.pool.variants[ci].len())
                 .sum();
-            // Each candidate's best variant on the grid.
-            let mut graded: Vec<(usize, usize, Increment)> = Vec::new();
+            // Each candidate's best variant on the grid, and the grid's other peaks that may
+            // beat it once refined.
+            let mut graded: Vec<(usize, usize, Increment, Vec<usize>)> = Vec::new();
             for &ci in &eligible {
                 let mut best: Option<(usize, Increment)> = None;
+                let mut profile: Vec<(usize, f64)> = Vec::new();
                 let tried: Vec<(usize, &Term)> = (0..self.pool.variants[ci].len())
                     .map(|vi| {
                         let t = overrides
@@ -1234,6 +1243,7 @@ impl Searcher<'_> {
                     if inc.separability < SEPARABILITY_TOLERANCE || inc.new_rank < t.width() {
                         continue;
                     }
+                    profile.push((vi, inc.delta_rss));
                     if best
                         .as_ref()
                         .is_none_or(|(_, b)| inc.delta_rss > b.delta_rss)
@@ -1256,7 +1266,8 @@ impl Searcher<'_> {
                 if dof <= inc.new_rank + 1 {
                     continue;
                 }
-                graded.push((ci, vi, inc));
+                let peaks = grid_peaks(&profile, vi);
+                graded.push((ci, vi, inc, peaks));
             }
             // Refining a period or time constant between its grid neighbours is worth it only
             // where the grid's best comes near significance, and only for the candidates that
@@ -1277,29 +1288,50 @@ impl Searcher<'_> {
                 .copied()
                 .filter(|&g| p_of(&graded[g].2) < REFINE_LEVEL * params.alpha)
                 .collect();
-            let better: Vec<Option<(Term, Increment)>> = to_refine
+            // Every peak is refined and the best refined one kept: a grid point can sit up to a
+            // quarter of the Fourier resolution off its optimum and lose a fifth of what the
+            // effect explains, more than tells a period from its aliases.
+            let better: Vec<Option<(usize, Term, Increment)>> = to_refine
                 .par_iter()
                 .map(|&g| {
-                    let (ci, vi, _) = &graded[g];
+                    let (ci, vi, inc, peaks) = &graded[g];
                     let score = |t: &Term| rss - projector.increment(&t.columns).delta_rss;
-                    self.candidate(*ci).refine(*vi, &score).map(|t| {
-                        let inc = projector.increment(&t.columns);
-                        (t, inc)
-                    })
+                    let mut best: Option<(usize, Option<Term>, f64)> =
+                        Some((*vi, None, rss - inc.delta_rss));
+                    for &peak in peaks {
+                        let refined = self.candidate(*ci).refine(peak, &score);
+                        let at = match &refined {
+                            Some(t) => score(t),
+                            None if peak == *vi => continue,
+                            None => score(&variant(&overrides, *ci, peak)),
+                        };
+                        if best.as_ref().is_none_or(|b| at < b.2) {
+                            best = Some((peak, refined, at));
+                        }
+                    }
+                    let (peak, term, _) = best?;
+                    let term = match term {
+                        Some(t) => t,
+                        None if peak == *vi => return None,
+                        None => variant(&overrides, *ci, peak),
+                    };
+                    let inc = projector.increment(&term.columns);
+                    Some((peak, term, inc))
                 })
                 .collect();
             for (&g, better) in to_refine.iter().zip(better) {
-                let Some((term, better)) = better else {
+                let Some((peak, term, better)) = better else {
                     continue;
                 };
-                let (ci, vi, inc) = &mut graded[g];
+                let (ci, vi, inc, _) = &mut graded[g];
+                *vi = peak;
                 *inc = better;
                 overrides.insert((*ci, *vi), nth_component(term, times_chosen[*ci]));
                 refined.insert((*ci, *vi));
             }
             let mut scored: Vec<Scored> = graded
                 .iter()
-                .map(|(ci, vi, inc)| (*ci, *vi, p_of(inc), inc.delta_rss / rss.max(1e-300)))
+                .map(|(ci, vi, inc, _)| (*ci, *vi, p_of(inc), inc.delta_rss / rss.max(1e-300)))
                 .collect();
             scored.sort_by(|a, b| a.2.total_cmp(&b.2).then(b.3.total_cmp(&a.3)));
             let mut ranking = Vec::new();
@@ -2066,6 +2098,42 @@ fn hyper_augmented(
 /// Δχ² below which another period explains the residual about as well as the chosen one.
 const MODE_CHI2: f64 = 10.0;
 
+/// Grid peaks refined beside the best one ([`grid_peaks`]).
+const MAX_PEAKS: usize = 4;
+
+/// Grid optima refined when a finding's other periods are sought ([`period_modes`]).
+const MAX_MODES: usize = 48;
+
+/// Share of the best grid point's reduction of the RSS a peak must reach to be refined: a grid
+/// point half a step (a quarter of the Fourier resolution) off a sine's optimum keeps about
+/// sinc²(¼) ≈ 0.81 of it.
+const PEAK_SHARE: f64 = 0.7;
+
+/// The local maxima of a scanned candidate's profile `(variant, RSS reduction)` (variants in
+/// grid order) that come within [`PEAK_SHARE`] of the best `best`: the best first, then the
+/// others by their reduction, at most [`MAX_PEAKS`] in all.
+fn grid_peaks(profile: &[(usize, f64)], best: usize) -> Vec<usize> {
+    let top = profile
+        .iter()
+        .find(|(v, _)| *v == best)
+        .map_or(f64::INFINITY, |p| p.1);
+    let mut peaks: Vec<(usize, f64)> = (0..profile.len())
+        .filter(|&i| {
+            let d = profile[i].1;
+            profile[i].0 != best
+                && d >= PEAK_SHARE * top
+                && (i == 0 || d >= profile[i - 1].1)
+                && (i + 1 == profile.len() || d > profile[i + 1].1)
+        })
+        .map(|i| profile[i])
+        .collect();
+    peaks.sort_by(|a, b| b.1.total_cmp(&a.1));
+    std::iter::once(best)
+        .chain(peaks.into_iter().map(|p| p.0))
+        .take(MAX_PEAKS)
+        .collect()
+}
+
 /// Another period of a periodic finding that fits about as well (an alias of the positions).
 struct PeriodMode {
     period: f64,
@@ -2088,7 +2156,9 @@ fn period_and_span(obs: &Observations, t: &Term) -> Option<(f64, f64)> {
 /// The local optima of the profile of the periodic term `term` (columns `col..` of the final
 /// design `x`, solution `sol`) over its candidate's grid, away from the chosen period by more
 /// than the Fourier resolution, whose fit is within [`MODE_CHI2`] of the chosen one's; best
-/// first, at most three.
+/// first. Every grid optimum within [`PEAK_SHARE`] of the chosen period's fit is refined (at
+/// most [`MAX_MODES`]): at few positions a periodic error has many aliases, and the grid alone
+/// cannot rank them.
 fn period_modes(
     obs: &Observations,
     w: &DVec,
@@ -2135,7 +2205,8 @@ fn period_modes(
         })
         .collect();
     optima.sort_by(|&a, &b| profile[b].1.total_cmp(&profile[a].1));
-    optima.truncate(6);
+    optima.retain(|&i| profile[i].1 >= PEAK_SHARE * delta0);
+    optima.truncate(MAX_MODES);
     let score = |t: &Term| rss_without - projector.increment(&t.columns).delta_rss;
     let refined: Vec<(f64, f64, Term)> = optima
         .into_iter()
@@ -2159,16 +2230,15 @@ fn period_modes(
         .filter(|(q, chi2, _)| (1.0 / q - 1.0 / p0).abs() > 1.0 / span && *chi2 < MODE_CHI2)
         .collect();
     modes.sort_by(|a, b| a.1.total_cmp(&b.1));
-    modes.truncate(3);
     modes
         .into_iter()
         .map(|(period, delta_chi2, t)| {
-            let fit = solve(&hcat(&rest, &t.columns), &obs.values, w);
-            let k = fit.coef.len();
+            let coef = projector.extended(&t.columns).coefficients(&obs.values);
+            let k = coef.len();
             PeriodMode {
                 period,
-                delta_chi2: delta_chi2.max(0.0),
-                amplitude: fit.coef[k - 2].hypot(fit.coef[k - 1]),
+                delta_chi2,
+                amplitude: coef[k - 2].hypot(coef[k - 1]),
             }
         })
         .collect()
