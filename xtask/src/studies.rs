@@ -102,7 +102,7 @@ pub fn run_one(spec: &Spec, index: usize, seed: u64, work: &Path) -> Record {
             };
         }
     };
-    let prepared = if spec.kind == Kind::Rtest {
+    let prepared = if matches!(spec.kind, Kind::Rtest | Kind::RtestHead) {
         mte_diagnose::load_with_noise(&truth.manifest, Some(stated_noise_um(truth.noise_um)))
     } else {
         mte_diagnose::load(&truth.manifest)
@@ -426,6 +426,11 @@ pub fn power_plan() -> Vec<(Kind, Effect, Vec<f64>)> {
             Kind::Rtest,
             Effect::Squareness,
             vec![10.0, 20.0, 40.0, 60.0],
+        ),
+        (
+            Kind::RtestHead,
+            Effect::PivotDrift,
+            vec![5.0, 10.0, 20.0, 30.0],
         ),
     ]
 }
@@ -800,7 +805,10 @@ threads. With `--n-power 10` a run takes about 3.5 minutes on two cores.\n\n\
 The datasets come from `xtask::realistic`: every machine carries all its ordinary errors at once, \
 each a random smooth function of its axis coordinate (random cubic plus two or three random-phase \
 waves of wavelength ½–2 strokes, scaled to a random size), at realistic sizes (positioning 3–20 µm, \
-straightness 1–8 µm, angular 2–25 µrad, squareness 5–60 µrad; R-test: location errors 5–40 µm and \
+straightness 1–8 µm, angular 2–25 µrad, squareness 5–60 µrad; R-test (`rtest`: a B/C trunnion, \
+table–table; `rtest-head`: a B swivel head with a pivot length of 150–350 mm over a C table, \
+head–table, whose B location errors EX0B, EZ0B place the B line against the tool it carries): \
+location errors 5–40 µm and \
 10–100 µrad, rotary error motions 1–5 µm / 2–20 µrad periodic over a turn, small linear-axis errors; \
 3-D points: a C table with X, Y, Z stages, every component error of X, Y, Z, three squareness \
 errors, the C line's location errors and C's six error motions, measured from two unknown \

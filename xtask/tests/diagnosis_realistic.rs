@@ -16,7 +16,12 @@ const SEED: u64 = 2026;
 fn clean_realistic_machines_rarely_yield_a_discovery() {
     // At a 5 % false-discovery rate, 2 or more discoveries among 12 clean datasets happen with
     // probability 0.12; 3 or more with 0.02.
-    for (kind, n) in [(Kind::Axis, 12), (Kind::Tracker, 6), (Kind::Rtest, 4)] {
+    for (kind, n) in [
+        (Kind::Axis, 12),
+        (Kind::Tracker, 6),
+        (Kind::Rtest, 4),
+        (Kind::RtestHead, 4),
+    ] {
         let f = studies::fdr(kind, n, SEED);
         assert_eq!(f.errors, 0, "{:?}: {:?}", kind, f.first_error);
         let allowed = if n >= 12 { 2 } else { 1 };
@@ -65,6 +70,18 @@ fn hidden_tracker_pitch_names_no_other_cause() {
         "another cause named: {:?}",
         c.names
     );
+}
+
+#[test]
+fn a_swivel_head_pivot_drift_is_named_and_sized() {
+    // Head–table machine: the B line's place against the tool it carries (the head's pivot)
+    // drifts over repeated cycles; the default model has that location error, so the drift of
+    // it is the cause to name.
+    let cells = studies::power(Kind::RtestHead, Effect::PivotDrift, &[20.0], 2, SEED);
+    let c = &cells[0];
+    assert_eq!(c.errors, 0);
+    assert_eq!(c.named_right, c.n, "{:?}", c.names);
+    assert!(c.estimate_within_2u + 1 >= c.named_right, "{:?}", c.names);
 }
 
 #[test]

@@ -75,6 +75,35 @@ fn perfect_bc_trunnion_gives_zero_readings() {
 }
 
 #[test]
+fn perfect_head_table_machine_gives_zero_readings_and_a_pivot_offset_its_pattern() {
+    let dir = tmp("rtest-head-zero");
+    let truth = write_spec(&perfect(Kind::RtestHead, &[]), 3, &dir).unwrap();
+    for r in &read_csv(&dir.join("rtest.csv")) {
+        for k in ["dx_um", "dy_um", "dz_um"] {
+            assert!(num(r, k).abs() <= 1e-9, "{r:?}");
+        }
+    }
+    assert!(truth.n_observations > 0);
+    // The B line δ off the tool along X: the tool point swings about (δ, 0, 0) from the pivot
+    // instead of the pivot, so it is off by (I − Rot_y(b))·δx̂ = δ·(1 − cos b, 0, sin b) (zero at
+    // the centring, B = 0), and the reading (ball − nest) is its negative, whatever C, the ball
+    // and the pivot length.
+    let mut m = BcMachine::perfect(200.0, 150.0);
+    m.head_pivot_mm = Some(260.0);
+    let delta = 0.02;
+    m.location.ex0b = delta;
+    let ball = V3::new(120.0, -80.0, 60.0);
+    let actual = m.centre_ball(ball, 0.5, 0.0);
+    for b in [-1.5_f64, -0.3, 0.0, 0.7, 1.9] {
+        for c in [0.0, 1.0, 3.0] {
+            let r = m.reading(ball, actual, b, c, 10.0);
+            let want = -delta * 1e3 * V3::new(1.0 - b.cos(), 0.0, b.sin());
+            assert!((r - want).norm() <= 1e-9, "b {b}: {r} vs {want}");
+        }
+    }
+}
+
+#[test]
 fn b_pivot_offset_gives_the_bk1_pattern() {
     // B turns about a line through (δ, 0, 0) parallel to Y: the ball (centred at B = 0) moves
     // against the nest by (I − Rot_y(−b))·δx̂ = δ·(1 − cos b, 0, −sin b), whatever the ball
@@ -263,7 +292,7 @@ fn generators_are_deterministic_and_hide_the_truth() {
                 amplitude_um: 2.0,
                 period_mm: 20.0,
             }],
-            Kind::Rtest => vec![Hidden::PivotDrift {
+            Kind::Rtest | Kind::RtestHead => vec![Hidden::PivotDrift {
                 rotary: 0,
                 um: 10.0,
                 tau_s: 900.0,

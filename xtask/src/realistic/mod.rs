@@ -41,6 +41,9 @@ pub enum Kind {
     Tracker,
     /// ISO 10791-6 R-test of a B/C trunnion (table–table) five-axis machine (`mte-rtest/1`).
     Rtest,
+    /// ISO 10791-6 R-test of a head–table five-axis machine: B swivel head, C table
+    /// (`mte-rtest/1`).
+    RtestHead,
     /// 3-D points of a target on the spindle of a C-table machine with X, Y, Z stages
     /// (`mte-dataset/1`, `"kind": "points"`), clean datasets only.
     Points,
@@ -48,14 +51,21 @@ pub enum Kind {
 
 impl Kind {
     /// All kinds.
-    pub const ALL: [Kind; 4] = [Kind::Axis, Kind::Tracker, Kind::Rtest, Kind::Points];
+    pub const ALL: [Kind; 5] = [
+        Kind::Axis,
+        Kind::Tracker,
+        Kind::Rtest,
+        Kind::RtestHead,
+        Kind::Points,
+    ];
 
-    /// Lower-case name (`axis`, `tracker`, `rtest`, `points`).
+    /// Lower-case name (`axis`, `tracker`, `rtest`, `rtest-head`, `points`).
     pub fn name(self) -> &'static str {
         match self {
             Kind::Axis => "axis",
             Kind::Tracker => "tracker",
             Kind::Rtest => "rtest",
+            Kind::RtestHead => "rtest-head",
             Kind::Points => "points",
         }
     }
@@ -326,7 +336,7 @@ pub fn write_spec(spec: &Spec, seed: u64, dir: &Path) -> std::io::Result<Truth> 
     match spec.kind {
         Kind::Axis => axis::write(spec, &mut rng, dir),
         Kind::Tracker => tracker::write(spec, &mut rng, dir),
-        Kind::Rtest => rtest::write(spec, &mut rng, dir),
+        Kind::Rtest | Kind::RtestHead => rtest::write(spec, &mut rng, dir),
         Kind::Points => points::write(spec, &mut rng, dir),
     }
 }

@@ -130,11 +130,16 @@ pub struct Location {
     pub eb0c: f64,
 }
 
-/// A B/C trunnion machine with its true errors.
+/// A B/C five-axis machine with its true errors: a trunnion (B tilts the table), or with
+/// `head_pivot_mm` a B swivel head on the tool side and the C table on the bed.
 #[derive(Debug, Clone)]
 pub struct BcMachine {
-    /// Table surface (C reference point) below the B line, mm.
+    /// Table surface (C reference point) below the B line (on the head machine: below the
+    /// machine origin), mm.
     pub h_c_mm: f64,
+    /// B swivel head: the B line lies this far above the tool point (pivot length), mm; the
+    /// location errors EX0B, EZ0B place the line against the tool, EA0B, EC0B tilt it.
+    pub head_pivot_mm: Option<f64>,
     /// Tool length, mm.
     pub tool_mm: f64,
     /// Location errors.
@@ -156,6 +161,7 @@ impl BcMachine {
     pub fn perfect(h_c_mm: f64, tool_mm: f64) -> Self {
         Self {
             h_c_mm,
+            head_pivot_mm: None,
             tool_mm,
             location: Location::default(),
             drift: Vec::new(),
@@ -178,13 +184,22 @@ impl BcMachine {
             .sum()
     }
 
+    /// The B motion about its actual line through `p_b` (mm; sign ±1 of the joint): the
+    /// error motion in the fixed frame.
+    fn b_motion(&self, b: f64, p_b: V3, sign: f64) -> Iso {
+        let l = &self.location;
+        let r_b = rot_x(l.ea0b) * rot_z(l.ec0b);
+        trans(p_b) * r_b * self.rotary[0].at(b, 1) * rot_y(sign * b) * r_b.inverse() * trans(-p_b)
+    }
+
     /// Workpiece frame in the bed at commanded B, C (rad) and time `t` (s).
     pub fn workpiece_in_bed(&self, b: f64, c: f64, t: f64) -> Iso {
         let l = &self.location;
-        let p_b = V3::new(l.ex0b + self.drift_of(0, t), 0.0, l.ez0b);
-        let r_b = rot_x(l.ea0b) * rot_z(l.ec0b);
-        let t_b =
-            trans(p_b) * r_b * self.rotary[0].at(b, 1) * rot_y(-b) * r_b.inverse() * trans(-p_b);
+        let t_b = if self.head_pivot_mm.is_some() {
+            Iso::identity()
+        } else {
+            self.b_motion(b, V3::new(l.ex0b + self.drift_of(0, t), 0.0, l.ez0b), -1.0)
+        };
         let c0 = V3::new(0.0, 0.0, -self.h_c_mm);
         let d_c = V3::new(l.ex0c + self.drift_of(1, t), l.ey0c, 0.0);
         let r_c = rot_x(l.ea0c) * rot_y(l.eb0c);
@@ -197,35 +212,55 @@ impl BcMachine {
         t_b * t_c
     }
 
-    /// Tool point (nest centre) in the bed at commanded linear axes (mm).
-    pub fn tool_in_bed(&self, x: f64, y: f64, z: f64) -> V3 {
+    /// Tool point (nest centre) in the bed at commanded linear axes (mm), B (rad, the head's)
+    /// and time `t` (s). The Z carriage's frame sits `tool_mm` (the head: the pivot length)
+    /// above the tool point.
+    pub fn tool_in_bed(&self, x: f64, y: f64, z: f64, b: f64, t: f64) -> V3 {
         let u_y = rot_z(self.squareness[0]) * V3::y();
         let u_z = rot_x(self.squareness[1]) * rot_y(self.squareness[2]) * V3::z();
-        (trans(y * u_y)
+        let arm = self.head_pivot_mm.unwrap_or(self.tool_mm);
+        let carriage = trans(y * u_y)
             * self.linear[1].at(y)
             * trans(x * V3::x())
             * self.linear[0].at(x)
-            * trans(V3::new(0.0, 0.0, self.tool_mm))
+            * trans(V3::new(0.0, 0.0, arm))
             * trans(z * u_z)
-            * self.linear[2].at(z)
-            * trans(V3::new(0.0, 0.0, -self.tool_mm)))
-        .translation
-        .vector
+            * self.linear[2].at(z);
+        let head = match self.head_pivot_mm {
+            Some(_) => {
+                let l = &self.location;
+                self.b_motion(b, V3::new(l.ex0b + self.drift_of(0, t), 0.0, l.ez0b), 1.0)
+            }
+            None => Iso::identity(),
+        };
+        (carriage * head * trans(V3::new(0.0, 0.0, -arm)))
+            .translation
+            .vector
     }
 
     /// Commanded linear axes putting the nominal tool point on the nominal ball (table
     /// coordinates, mm) at B, C (rad).
     pub fn command(&self, ball: V3, b: f64, c: f64) -> [f64; 3] {
-        let p = (rot_y(-b) * trans(V3::new(0.0, 0.0, -self.h_c_mm)) * rot_z(-c))
-            .transform_point(&ball.into());
-        [p.x, p.y, p.z]
+        match self.head_pivot_mm {
+            Some(arm) => {
+                let p = (trans(V3::new(0.0, 0.0, -self.h_c_mm)) * rot_z(-c))
+                    .transform_point(&ball.into());
+                // The tool point swings about the pivot `arm` above it.
+                [p.x + arm * b.sin(), p.y, p.z - arm * (1.0 - b.cos())]
+            }
+            None => {
+                let p = (rot_y(-b) * trans(V3::new(0.0, 0.0, -self.h_c_mm)) * rot_z(-c))
+                    .transform_point(&ball.into());
+                [p.x, p.y, p.z]
+            }
+        }
     }
 
     /// The actual ball centre in table coordinates after centring at B = 0, C = `c_ref` (rad),
     /// time `t` (s).
     pub fn centre_ball(&self, ball: V3, c_ref: f64, t: f64) -> V3 {
         let q = self.command(ball, 0.0, c_ref);
-        let tool = self.tool_in_bed(q[0], q[1], q[2]);
+        let tool = self.tool_in_bed(q[0], q[1], q[2], 0.0, t);
         self.workpiece_in_bed(0.0, c_ref, t)
             .inverse_transform_point(&tool.into())
             .coords
@@ -238,12 +273,37 @@ impl BcMachine {
         let wp = self
             .workpiece_in_bed(b, c, t)
             .transform_point(&ball_actual.into());
-        (wp.coords - self.tool_in_bed(q[0], q[1], q[2])) * 1e3
+        (wp.coords - self.tool_in_bed(q[0], q[1], q[2], b, t)) * 1e3
     }
 
     /// The `mte-machine/1` description of the nominal machine.
     pub fn machine_json(&self) -> serde_json::Value {
         let [sx, sy, sz] = self.strokes;
+        if let Some(arm) = self.head_pivot_mm {
+            return serde_json::json!({
+                "format": "mte-machine/1",
+                "name": "b-head-c-table",
+                "description": "Five-axis machine with a B swivel head and a C table: X, Y, Z on the tool side (bed-Y-X-Z-B-tool), the B head tilts the tool about Y through the pivot above the tool point; C turns the table on the bed (sign -1).",
+                "tool": "tool",
+                "workpiece": "workpiece",
+                "axis_order": ["X", "Y", "Z", "B", "C"],
+                "bodies": [
+                    {"name": "bed"},
+                    {"name": "Y", "parent": "bed", "offset_mm": [0, 0, 0],
+                     "joint": {"type": "linear", "axis": "Y", "direction": [0, 1, 0], "sign": 1, "stroke_mm": [sy.0, sy.1]}},
+                    {"name": "X", "parent": "Y", "offset_mm": [0, 0, 0],
+                     "joint": {"type": "linear", "axis": "X", "direction": [1, 0, 0], "sign": 1, "stroke_mm": [sx.0, sx.1]}},
+                    {"name": "Z", "parent": "X", "offset_mm": [0.0, 0.0, arm],
+                     "joint": {"type": "linear", "axis": "Z", "direction": [0, 0, 1], "sign": 1, "stroke_mm": [sz.0, sz.1]}},
+                    {"name": "B", "parent": "Z", "offset_mm": [0, 0, 0],
+                     "joint": {"type": "rotary", "axis": "B", "direction": [0, 1, 0], "sign": 1, "stroke_deg": [-120, 120]}},
+                    {"name": "tool", "parent": "B", "offset_mm": [0.0, 0.0, -arm]},
+                    {"name": "C", "parent": "bed", "offset_mm": [0.0, 0.0, -self.h_c_mm],
+                     "joint": {"type": "rotary", "axis": "C", "direction": [0, 0, 1], "sign": -1, "stroke_deg": [0, 360]}},
+                    {"name": "workpiece", "parent": "C", "offset_mm": [0, 0, 0]}
+                ]
+            });
+        }
         serde_json::json!({
             "format": "mte-machine/1",
             "name": "bc-trunnion",
@@ -284,6 +344,12 @@ pub(crate) fn write(spec: &Spec, rng: &mut ChaCha8Rng, dir: &Path) -> std::io::R
         rng.random_range(80.0..=120.0_f64).round(),
         rng.random_range(100.0..=200.0_f64).round(),
     );
+    if spec.kind == Kind::RtestHead {
+        m.head_pivot_mm = Some(rng.random_range(150.0..=350.0_f64).round());
+        // The table surface below the machine origin, which lies at the tool point with Z at 0.
+        m.h_c_mm = rng.random_range(150.0..=300.0_f64).round();
+        m.strokes = [(-600.0, 600.0), (-300.0, 300.0), (-800.0, 300.0)];
+    }
     let pos = |rng: &mut ChaCha8Rng| signed(rng, 5.0, 40.0) * 1e-3 * s;
     let ori = |rng: &mut ChaCha8Rng| signed(rng, 10.0, 100.0) * 1e-6 * s;
     m.location = Location {
@@ -387,7 +453,7 @@ pub(crate) fn write(spec: &Spec, rng: &mut ChaCha8Rng, dir: &Path) -> std::io::R
                     detail: String::new(),
                 });
             }
-            _ => return Err(unsupported(Kind::Rtest, h)),
+            _ => return Err(unsupported(spec.kind, h)),
         }
     }
     for e in &mut effects {
@@ -517,7 +583,7 @@ pub(crate) fn write(spec: &Spec, rng: &mut ChaCha8Rng, dir: &Path) -> std::io::R
     });
     let path = write_manifest(dir, manifest, &spec.base_model)?;
     Ok(Truth {
-        kind: Kind::Rtest,
+        kind: spec.kind,
         manifest: path,
         effects,
         ordinary,

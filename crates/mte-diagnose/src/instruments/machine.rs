@@ -177,21 +177,43 @@ pub(crate) fn slot_effects(
         let slot = machine.error_slots()[j];
         let c = slot.component.index();
         let axis = machine.slot_axis(j);
+        // A head axis' line moves against the tool it carries: its position error is the
+        // slot with the tool kept in place (the slot alone shifts the head rigidly).
+        let carried_tool = (slot.kind == SlotKind::Position && c < 3)
+            .then(|| tool_carried_by(machine, slot.body))
+            .flatten();
+        let column_of = |m: &DMat| match carried_tool {
+            Some(tool) => absolute_location_column(machine, m, slot.body, tool, c),
+            None => Some(m.column(j).into_owned()),
+        };
         let column = match (axis.map(|a| a.kind), slot.kind) {
             (Some(AxisKind::Linear), SlotKind::Position) => continue,
-            _ => s.column(j).into_owned(),
+            _ => match column_of(s) {
+                Some(col) => col,
+                None => continue,
+            },
         };
         let axis_k = axis.and_then(|a| machine.axis_index(&a.name));
         let reference = reference.map(|(r, ref_axes)| {
             let coordinate = axis_k
                 .map(|k| ref_axes[k].clone())
                 .unwrap_or_else(|| vec![0.0; column.len()]);
-            (r.column(j).into_owned(), coordinate)
+            (
+                column_of(r).unwrap_or_else(|| DVec::zeros(column.len())),
+                coordinate,
+            )
         });
         if column.amax() < 1e-12 && reference.as_ref().is_none_or(|(r, _)| r.amax() < 1e-12) {
             continue;
         }
-        let name = slot_name(machine, j);
+        let mut name = slot_name(machine, j);
+        if carried_tool.is_some() {
+            name.label = format!("{} (the line against the tool)", name.label);
+            name.meaning = format!(
+                "{}; on the head, the axis line is off its place against the tool it carries (pivot offset)",
+                name.meaning
+            );
+        }
         if let (Some(axis), SlotKind::Motion) = (axis, slot.kind) {
             if axis.kind == AxisKind::Linear && c < 3 {
                 if let (Some(k), Some(own)) =
@@ -261,6 +283,20 @@ pub(crate) fn slot_effects(
         });
     }
     out
+}
+
+/// The body after the rotary axis body `body` on the tool branch, when no axis moves it (the
+/// tool, or a spindle that carries it): the head axis carries the tool directly.
+fn tool_carried_by(machine: &Machine, body: usize) -> Option<usize> {
+    let chain = machine.tool_chain();
+    let k = chain.iter().position(|&b| b == body)?;
+    let next = *chain.get(k + 1)?;
+    let moved = |b: usize| machine.axes().iter().any(|a| a.body == b);
+    let rotary = machine
+        .axes()
+        .iter()
+        .any(|a| a.body == body && a.kind == AxisKind::Rotary);
+    (rotary && !moved(next)).then_some(next)
 }
 
 /// The body after `body` on its kinematic branch, when it is moved by a rotary axis.
