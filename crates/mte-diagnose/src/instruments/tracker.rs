@@ -286,7 +286,7 @@ impl ObservationModel for Tracker {
             quantity: Quantity::Ratio,
             role: SlotRole::Constant { family: Family::Instrument },
             column: DVec::from_column_slice(&self.distance),
-            separated_by: Some("a calibrated reference length (scale bar) measured by the tracker, or the machine's own scale checked with a laser interferometer".into()),
+            separated_by: Some("a calibrated reference length (scale bar) measured by the tracker, or the machine's own scale checked with a laser interferometer: without one, every length too long in proportion reads the same as a common scale error of X, Y and Z (EXX, EYY, EZZ alike) with the stations' places scaled as well".into()),
             reference: None,
         });
         Effects {
