@@ -279,53 +279,51 @@ impl BcMachine {
     /// The `mte-machine/1` description of the nominal machine.
     pub fn machine_json(&self) -> serde_json::Value {
         let [sx, sy, sz] = self.strokes;
-        if let Some(arm) = self.head_pivot_mm {
-            return serde_json::json!({
-                "format": "mte-machine/1",
-                "name": "b-head-c-table",
-                "description": "Five-axis machine with a B swivel head and a C table: X, Y, Z on the tool side (bed-Y-X-Z-B-tool), the B head tilts the tool about Y through the pivot above the tool point; C turns the table on the bed (sign -1).",
-                "tool": "tool",
-                "workpiece": "workpiece",
-                "axis_order": ["X", "Y", "Z", "B", "C"],
-                "bodies": [
-                    {"name": "bed"},
-                    {"name": "Y", "parent": "bed", "offset_mm": [0, 0, 0],
-                     "joint": {"type": "linear", "axis": "Y", "direction": [0, 1, 0], "sign": 1, "stroke_mm": [sy.0, sy.1]}},
-                    {"name": "X", "parent": "Y", "offset_mm": [0, 0, 0],
-                     "joint": {"type": "linear", "axis": "X", "direction": [1, 0, 0], "sign": 1, "stroke_mm": [sx.0, sx.1]}},
-                    {"name": "Z", "parent": "X", "offset_mm": [0.0, 0.0, arm],
-                     "joint": {"type": "linear", "axis": "Z", "direction": [0, 0, 1], "sign": 1, "stroke_mm": [sz.0, sz.1]}},
-                    {"name": "B", "parent": "Z", "offset_mm": [0, 0, 0],
-                     "joint": {"type": "rotary", "axis": "B", "direction": [0, 1, 0], "sign": 1, "stroke_deg": [-120, 120]}},
-                    {"name": "tool", "parent": "B", "offset_mm": [0.0, 0.0, -arm]},
-                    {"name": "C", "parent": "bed", "offset_mm": [0.0, 0.0, -self.h_c_mm],
-                     "joint": {"type": "rotary", "axis": "C", "direction": [0, 0, 1], "sign": -1, "stroke_deg": [0, 360]}},
-                    {"name": "workpiece", "parent": "C", "offset_mm": [0, 0, 0]}
-                ]
-            });
-        }
+        let arm = self.head_pivot_mm.unwrap_or(self.tool_mm);
+        let mut bodies = vec![
+            serde_json::json!({"name": "bed"}),
+            serde_json::json!({"name": "Y", "parent": "bed", "offset_mm": [0, 0, 0],
+             "joint": {"type": "linear", "axis": "Y", "direction": [0, 1, 0], "sign": 1, "stroke_mm": [sy.0, sy.1]}}),
+            serde_json::json!({"name": "X", "parent": "Y", "offset_mm": [0, 0, 0],
+             "joint": {"type": "linear", "axis": "X", "direction": [1, 0, 0], "sign": 1, "stroke_mm": [sx.0, sx.1]}}),
+            serde_json::json!({"name": "Z", "parent": "X", "offset_mm": [0.0, 0.0, arm],
+             "joint": {"type": "linear", "axis": "Z", "direction": [0, 0, 1], "sign": 1, "stroke_mm": [sz.0, sz.1]}}),
+        ];
+        let (name, description) = if self.head_pivot_mm.is_some() {
+            bodies.extend([
+                serde_json::json!({"name": "B", "parent": "Z", "offset_mm": [0, 0, 0],
+                 "joint": {"type": "rotary", "axis": "B", "direction": [0, 1, 0], "sign": 1, "stroke_deg": [-120, 120]}}),
+                serde_json::json!({"name": "tool", "parent": "B", "offset_mm": [0.0, 0.0, -arm]}),
+                serde_json::json!({"name": "C", "parent": "bed", "offset_mm": [0.0, 0.0, -self.h_c_mm],
+                 "joint": {"type": "rotary", "axis": "C", "direction": [0, 0, 1], "sign": -1, "stroke_deg": [0, 360]}}),
+            ]);
+            (
+                "b-head-c-table",
+                "Five-axis machine with a B swivel head and a C table: X, Y, Z on the tool side (bed-Y-X-Z-B-tool), the B head tilts the tool about Y through the pivot above the tool point; C turns the table on the bed (sign -1).",
+            )
+        } else {
+            bodies.extend([
+                serde_json::json!({"name": "tool", "parent": "Z", "offset_mm": [0.0, 0.0, -arm]}),
+                serde_json::json!({"name": "B", "parent": "bed", "offset_mm": [0, 0, 0],
+                 "joint": {"type": "rotary", "axis": "B", "direction": [0, 1, 0], "sign": -1, "stroke_deg": [-120, 120]}}),
+                serde_json::json!({"name": "C", "parent": "B", "offset_mm": [0.0, 0.0, -self.h_c_mm],
+                 "joint": {"type": "rotary", "axis": "C", "direction": [0, 0, 1], "sign": -1, "stroke_deg": [0, 360]}}),
+            ]);
+            (
+                "bc-trunnion",
+                "B/C trunnion five-axis machine: X, Y, Z on the tool side (bed-Y-X-Z-tool), B tilts the cradle about Y through the machine origin and carries the C table; table rotary axes with sign -1.",
+            )
+        };
+        bodies
+            .push(serde_json::json!({"name": "workpiece", "parent": "C", "offset_mm": [0, 0, 0]}));
         serde_json::json!({
             "format": "mte-machine/1",
-            "name": "bc-trunnion",
-            "description": "B/C trunnion five-axis machine: X, Y, Z on the tool side (bed-Y-X-Z-tool), B tilts the cradle about Y through the machine origin and carries the C table; table rotary axes with sign -1.",
+            "name": name,
+            "description": description,
             "tool": "tool",
             "workpiece": "workpiece",
             "axis_order": ["X", "Y", "Z", "B", "C"],
-            "bodies": [
-                {"name": "bed"},
-                {"name": "Y", "parent": "bed", "offset_mm": [0, 0, 0],
-                 "joint": {"type": "linear", "axis": "Y", "direction": [0, 1, 0], "sign": 1, "stroke_mm": [sy.0, sy.1]}},
-                {"name": "X", "parent": "Y", "offset_mm": [0, 0, 0],
-                 "joint": {"type": "linear", "axis": "X", "direction": [1, 0, 0], "sign": 1, "stroke_mm": [sx.0, sx.1]}},
-                {"name": "Z", "parent": "X", "offset_mm": [0.0, 0.0, self.tool_mm],
-                 "joint": {"type": "linear", "axis": "Z", "direction": [0, 0, 1], "sign": 1, "stroke_mm": [sz.0, sz.1]}},
-                {"name": "tool", "parent": "Z", "offset_mm": [0.0, 0.0, -self.tool_mm]},
-                {"name": "B", "parent": "bed", "offset_mm": [0, 0, 0],
-                 "joint": {"type": "rotary", "axis": "B", "direction": [0, 1, 0], "sign": -1, "stroke_deg": [-120, 120]}},
-                {"name": "C", "parent": "B", "offset_mm": [0.0, 0.0, -self.h_c_mm],
-                 "joint": {"type": "rotary", "axis": "C", "direction": [0, 0, 1], "sign": -1, "stroke_deg": [0, 360]}},
-                {"name": "workpiece", "parent": "C", "offset_mm": [0, 0, 0]}
-            ]
+            "bodies": bodies,
         })
     }
 }
