@@ -1266,7 +1266,7 @@ impl Searcher<'_> {
                 if dof <= inc.new_rank + 1 {
                     continue;
                 }
-                let peaks = grid_peaks(&profile, vi);
+                let peaks = grid_peaks(&profile, vi, inc.delta_rss);
                 graded.push((ci, vi, inc, peaks));
             }
             // Refining a period or time constant between its grid neighbours is worth it only
@@ -1296,27 +1296,21 @@ impl Searcher<'_> {
                 .map(|&g| {
                     let (ci, vi, inc, peaks) = &graded[g];
                     let score = |t: &Term| rss - projector.increment(&t.columns).delta_rss;
-                    let mut best: Option<(usize, Option<Term>, f64)> =
-                        Some((*vi, None, rss - inc.delta_rss));
-                    for &peak in peaks {
-                        let refined = self.candidate(*ci).refine(peak, &score);
-                        let at = match &refined {
-                            Some(t) => score(t),
-                            None if peak == *vi => continue,
-                            None => score(&variant(&overrides, *ci, peak)),
-                        };
-                        if best.as_ref().is_none_or(|b| at < b.2) {
-                            best = Some((peak, refined, at));
-                        }
-                    }
-                    let (peak, term, _) = best?;
-                    let term = match term {
-                        Some(t) => t,
-                        None if peak == *vi => return None,
-                        None => variant(&overrides, *ci, peak),
-                    };
-                    let inc = projector.increment(&term.columns);
-                    Some((peak, term, inc))
+                    // Each peak refined (the grid's best only when refining improves it); the
+                    // first with the largest reduction, if it beats the grid's best.
+                    peaks
+                        .iter()
+                        .filter_map(|&peak| {
+                            let term = match self.candidate(*ci).refine(peak, &score) {
+                                Some(t) => t,
+                                None if peak == *vi => return None,
+                                None => variant(&overrides, *ci, peak),
+                            };
+                            let inc = projector.increment(&term.columns);
+                            Some((peak, term, inc))
+                        })
+                        .reduce(|a, b| if b.2.delta_rss > a.2.delta_rss { b } else { a })
+                        .filter(|b| b.2.delta_rss > inc.delta_rss)
                 })
                 .collect();
             for (&g, better) in to_refine.iter().zip(better) {
@@ -2109,23 +2103,25 @@ const MAX_MODES: usize = 48;
 /// sinc²(¼) ≈ 0.81 of it.
 const PEAK_SHARE: f64 = 0.7;
 
-/// The local maxima of a scanned candidate's profile `(variant, RSS reduction)` (variants in
-/// grid order) that come within [`PEAK_SHARE`] of the best `best`: the best first, then the
-/// others by their reduction, at most [`MAX_PEAKS`] in all.
-fn grid_peaks(profile: &[(usize, f64)], best: usize) -> Vec<usize> {
-    let top = profile
-        .iter()
-        .find(|(v, _)| *v == best)
-        .map_or(f64::INFINITY, |p| p.1);
-    let mut peaks: Vec<(usize, f64)> = (0..profile.len())
+/// Indices of the local maxima of `values`: not below either neighbour (an end, its one).
+fn local_maxima(values: &[f64]) -> Vec<usize> {
+    (0..values.len())
         .filter(|&i| {
-            let d = profile[i].1;
-            profile[i].0 != best
-                && d >= PEAK_SHARE * top
-                && (i == 0 || d >= profile[i - 1].1)
-                && (i + 1 == profile.len() || d > profile[i + 1].1)
+            (i == 0 || values[i] >= values[i - 1])
+                && (i + 1 == values.len() || values[i] >= values[i + 1])
         })
+        .collect()
+}
+
+/// The local maxima of a scanned candidate's profile `(variant, RSS reduction)` (variants in
+/// grid order) that come within [`PEAK_SHARE`] of the best variant `best` (reduction `top`):
+/// the best first, then the others by their reduction, at most [`MAX_PEAKS`] in all.
+fn grid_peaks(profile: &[(usize, f64)], best: usize, top: f64) -> Vec<usize> {
+    let reductions: Vec<f64> = profile.iter().map(|p| p.1).collect();
+    let mut peaks: Vec<(usize, f64)> = local_maxima(&reductions)
+        .into_iter()
         .map(|i| profile[i])
+        .filter(|&(v, d)| v != best && d >= PEAK_SHARE * top)
         .collect();
     peaks.sort_by(|a, b| b.1.total_cmp(&a.1));
     std::iter::once(best)
@@ -2196,13 +2192,10 @@ fn period_modes(
         .collect();
     // Local optima on the grid, away from the chosen period, the best few refined between their
     // grid neighbours (a grid point can sit half a step off its optimum).
-    let mut optima: Vec<usize> = (0..profile.len())
-        .filter(|&i| {
-            let d = profile[i].1;
-            (i == 0 || d >= profile[i - 1].1)
-                && (i + 1 == profile.len() || d >= profile[i + 1].1)
-                && (1.0 / profile[i].0 - 1.0 / p0).abs() > 1.0 / span
-        })
+    let reductions: Vec<f64> = profile.iter().map(|p| p.1).collect();
+    let mut optima: Vec<usize> = local_maxima(&reductions)
+        .into_iter()
+        .filter(|&i| (1.0 / profile[i].0 - 1.0 / p0).abs() > 1.0 / span)
         .collect();
     optima.sort_by(|&a, &b| profile[b].1.total_cmp(&profile[a].1));
     optima.retain(|&i| profile[i].1 >= PEAK_SHARE * delta0);

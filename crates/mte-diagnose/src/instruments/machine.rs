@@ -285,32 +285,42 @@ pub(crate) fn slot_effects(
     out
 }
 
+/// The body after `body` on its kinematic branch, and whether that branch is the tool's.
+fn next_body(machine: &Machine, body: usize) -> Option<(usize, bool)> {
+    [
+        (machine.tool_chain(), true),
+        (machine.workpiece_chain(), false),
+    ]
+    .into_iter()
+    .find_map(|(chain, tool)| {
+        let k = chain.iter().position(|&b| b == body)?;
+        chain.get(k + 1).map(|&next| (next, tool))
+    })
+}
+
+/// The kind of the axis that moves `body`, if one does.
+fn axis_kind_of(machine: &Machine, body: usize) -> Option<AxisKind> {
+    machine
+        .axes()
+        .iter()
+        .find(|a| a.body == body)
+        .map(|a| a.kind)
+}
+
 /// The body after the rotary axis body `body` on the tool branch, when no axis moves it (the
 /// tool, or a spindle that carries it): the head axis carries the tool directly.
 fn tool_carried_by(machine: &Machine, body: usize) -> Option<usize> {
-    let chain = machine.tool_chain();
-    let k = chain.iter().position(|&b| b == body)?;
-    let next = *chain.get(k + 1)?;
-    let moved = |b: usize| machine.axes().iter().any(|a| a.body == b);
-    let rotary = machine
-        .axes()
-        .iter()
-        .any(|a| a.body == body && a.kind == AxisKind::Rotary);
-    (rotary && !moved(next)).then_some(next)
+    let (next, tool) = next_body(machine, body)?;
+    (tool
+        && axis_kind_of(machine, body) == Some(AxisKind::Rotary)
+        && axis_kind_of(machine, next).is_none())
+    .then_some(next)
 }
 
 /// The body after `body` on its kinematic branch, when it is moved by a rotary axis.
 fn rotary_child(machine: &Machine, body: usize) -> Option<usize> {
-    let child = [machine.tool_chain(), machine.workpiece_chain()]
-        .into_iter()
-        .find_map(|chain| {
-            chain
-                .iter()
-                .position(|&b| b == body)
-                .and_then(|k| chain.get(k + 1).copied())
-        })?;
-    let k = machine.axes().iter().position(|a| a.body == child)?;
-    (machine.axes()[k].kind == AxisKind::Rotary).then_some(child)
+    let (child, _) = next_body(machine, body)?;
+    (axis_kind_of(machine, child) == Some(AxisKind::Rotary)).then_some(child)
 }
 
 /// A location error of a rotary axis that carries another rotary axis exists in two
