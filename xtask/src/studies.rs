@@ -548,6 +548,9 @@ pub struct PowerCell {
     pub named_as_alternative: usize,
     /// Of those, datasets whose estimate is within 2 u of the truth.
     pub estimate_within_2u: usize,
+    /// Datasets whose findings all name the effect (no other cause) and whose verdict is that
+    /// the causes found explain the data.
+    pub alone_explained: usize,
     /// Most frequent finding names.
     pub names: Vec<(String, usize)>,
 }
@@ -618,6 +621,7 @@ pub fn power_with(
                 named_right: 0,
                 named_as_alternative: 0,
                 estimate_within_2u: 0,
+                alone_explained: 0,
                 names: Vec::new(),
             };
             let mut all_names = Vec::new();
@@ -635,6 +639,10 @@ pub fn power_with(
                 if let Some(f) = right {
                     c.named_right += 1;
                     c.estimate_within_2u += usize::from(estimate_matches(truth, f, 2.0));
+                    c.alone_explained += usize::from(
+                        o.verdict == mte_diagnose::Verdict::Explained
+                            && o.findings.iter().all(|f| names_effect(truth, &f.name)),
+                    );
                 } else {
                     let listed = truth.kind == EffectKind::InstrumentScale
                         && o.not_separable.iter().any(|a| names_effect(truth, a));
@@ -741,13 +749,13 @@ pub fn openworld_with(
 fn power_table(s: &mut String, cells: &[PowerCell]) {
     let _ = writeln!(
         s,
-        "| kind | effect | size | datasets | errors | any finding | named right | else reported as not separable | within 2 u | most frequent findings |\n|---|---|---|---|---|---|---|---|---|---|"
+        "| kind | effect | size | datasets | errors | any finding | named right | else reported as not separable | within 2 u | named alone, explained | most frequent findings |\n|---|---|---|---|---|---|---|---|---|---|---|"
     );
     for c in cells {
         let ran = c.n - c.errors;
         let _ = writeln!(
             s,
-            "| {} | {} | {} {} | {} | {} | {} | {} | {} | {} | {} |",
+            "| {} | {} | {} {} | {} | {} | {} | {} | {} | {} | {} | {} |",
             c.kind.name(),
             c.effect.name(),
             c.size,
@@ -758,6 +766,7 @@ fn power_table(s: &mut String, cells: &[PowerCell]) {
             pct(c.named_right, ran),
             pct(c.named_as_alternative, ran),
             pct(c.estimate_within_2u, c.named_right),
+            pct(c.alone_explained, ran),
             top(&c.names, 3)
         );
     }
@@ -906,7 +915,10 @@ names it (that list is the same on clean data: it says what the data cannot show
 effect was seen); *within 2 u*: \
 of those named right, |estimate − truth| ≤ 2 u (the `amplitude` estimate or the first; \
 magnitudes for periodic amplitudes and squareness, whose sign convention is the engine's; \
-for B tilt and squareness the truth is the machine's total, ordinary + hidden). Pitch periods \
+for B tilt and squareness the truth is the machine's total, ordinary + hidden); *named alone, \
+explained*: of all datasets, those where the effect is named right, no finding names anything \
+else, and the verdict is that the causes found explain the data (residuals consistent with the \
+noise, no structure left) — what a user should see. Pitch periods \
 5–40 mm, pivot drift τ 600–3600 s, C harmonics 1–4 drawn per dataset.\n\n\
 "
         );

@@ -202,33 +202,84 @@ pub(crate) fn splitmix64(i: u64) -> u64 {
     z ^ (z >> 31)
 }
 
-/// The minimiser of `f` on `[a, b]` by `iterations` golden-section steps.
-pub(crate) fn golden_section(
-    mut a: f64,
-    mut b: f64,
-    iterations: usize,
+/// A minimiser of `f` on `[a, b]` to within `tolerance`: Brent's bounded method (parabolic
+/// steps where the function is smooth, golden-section steps where not; scipy's `fminbound`),
+/// about a third of the evaluations golden-section search needs for the same precision.
+/// Returns the best point evaluated and its value. At most 200 evaluations.
+pub(crate) fn bounded_minimum(
+    a: f64,
+    b: f64,
+    tolerance: f64,
     f: impl Fn(f64) -> f64,
-) -> f64 {
-    let golden = 0.5 * (5f64.sqrt() - 1.0);
-    let mut c = b - golden * (b - a);
-    let mut d = a + golden * (b - a);
-    let (mut fc, mut fd) = (f(c), f(d));
-    for _ in 0..iterations {
-        if fc < fd {
-            b = d;
-            d = c;
-            fd = fc;
-            c = b - golden * (b - a);
-            fc = f(c);
+) -> (f64, f64) {
+    const MAX_EVALUATIONS: usize = 200;
+    let sqrt_eps = f64::EPSILON.sqrt();
+    let golden = 0.5 * (3.0 - 5f64.sqrt());
+    let (mut a, mut b) = (a.min(b), a.max(b));
+    // x: the best point, w the second best, v the previous w.
+    let mut x = a + golden * (b - a);
+    let mut fx = f(x);
+    let (mut w, mut fw, mut v, mut fv) = (x, fx, x, fx);
+    let (mut step, mut previous) = (0.0f64, 0.0f64);
+    for _ in 1..MAX_EVALUATIONS {
+        let middle = 0.5 * (a + b);
+        let tol1 = sqrt_eps * x.abs() + tolerance / 3.0;
+        let tol2 = 2.0 * tol1;
+        if (x - middle).abs() <= tol2 - 0.5 * (b - a) {
+            break;
+        }
+        let mut parabolic = false;
+        if previous.abs() > tol1 {
+            let r = (x - w) * (fx - fv);
+            let q = (x - v) * (fx - fw);
+            let mut p = (x - v) * q - (x - w) * r;
+            let mut q = 2.0 * (q - r);
+            if q > 0.0 {
+                p = -p;
+            }
+            q = q.abs();
+            let before = previous;
+            previous = step;
+            if p.abs() < (0.5 * q * before).abs() && p > q * (a - x) && p < q * (b - x) {
+                step = p / q;
+                parabolic = true;
+                let u = x + step;
+                if u - a < tol2 || b - u < tol2 {
+                    step = if middle >= x { tol1 } else { -tol1 };
+                }
+            }
+        }
+        if !parabolic {
+            previous = if x >= middle { a - x } else { b - x };
+            step = golden * previous;
+        }
+        let u = x + if step >= 0.0 {
+            step.max(tol1)
         } else {
-            a = c;
-            c = d;
-            fc = fd;
-            d = a + golden * (b - a);
-            fd = f(d);
+            step.min(-tol1)
+        };
+        let fu = f(u);
+        if fu <= fx {
+            if u >= x {
+                a = x;
+            } else {
+                b = x;
+            }
+            (v, fv, w, fw, x, fx) = (w, fw, x, fx, u, fu);
+        } else {
+            if u < x {
+                a = u;
+            } else {
+                b = u;
+            }
+            if fu <= fw || w == x {
+                (v, fv, w, fw) = (w, fw, u, fu);
+            } else if fu <= fv || v == x || v == w {
+                (v, fv) = (u, fu);
+            }
         }
     }
-    0.5 * (a + b)
+    (x, fx)
 }
 
 /// The rows of a variable grouped by equal value: a function of the variable takes one value
@@ -268,6 +319,31 @@ impl Groups {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn bounded_minimum_finds_known_minima_to_tolerance_in_few_evaluations() {
+        use std::cell::Cell;
+        // (function, bracket, true minimiser): a parabola, a smooth non-quadratic minimum
+        // (x·e^(−x) reversed: minimum of −x e^(−x) at 1), a minimum at the bracket's edge.
+        type Case<'a> = (&'a dyn Fn(f64) -> f64, f64, f64, f64);
+        let cases: [Case; 3] = [
+            (&|x: f64| (x - 1.234).powi(2), 0.0, 3.0, 1.234),
+            (&|x: f64| -x * (-x).exp(), 0.2, 4.0, 1.0),
+            (&|x: f64| x, 2.0, 5.0, 2.0),
+        ];
+        for (f, a, b, truth) in cases {
+            let calls = Cell::new(0usize);
+            let tolerance = 1e-5 * (b - a);
+            let (x, fx) = bounded_minimum(a, b, tolerance, |x| {
+                calls.set(calls.get() + 1);
+                f(x)
+            });
+            assert!((x - truth).abs() < 2.0 * tolerance, "{x} against {truth}");
+            assert_eq!(fx, f(x));
+            // Golden-section search needs 25 evaluations for 1e-5 of the bracket.
+            assert!(calls.get() <= 25, "{} evaluations", calls.get());
+        }
+    }
 
     #[test]
     fn sin_cos_of_turns_matches_the_library_functions() {

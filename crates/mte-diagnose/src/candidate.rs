@@ -880,10 +880,10 @@ impl Candidate for Scan {
         let lo = self.grid[best.saturating_sub(1)];
         let hi = self.grid[(best + 1).min(self.grid.len() - 1)];
         let f = |p: f64| score(&self.term(p));
-        // 24 steps narrow the bracket (two grid steps) to 1e-5 of a step: far below the
-        // uncertainty of a period or time constant the data can tell.
-        let p = crate::basis::golden_section(lo, hi, 24, f);
-        (f(p) < f(self.grid[best])).then(|| self.term(p))
+        // To 1e-5 of the bracket (two grid steps): far below the uncertainty of a period or
+        // time constant the data can tell.
+        let (p, fp) = crate::basis::bounded_minimum(lo, hi, 1e-5 * (hi - lo).abs(), f);
+        (fp < f(self.grid[best])).then(|| self.term(p))
     }
 
     fn at(&self, _variant: usize, value: f64) -> Option<Term> {

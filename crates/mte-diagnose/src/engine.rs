@@ -1054,11 +1054,12 @@ impl Searcher<'_> {
         self.candidates[c.candidate].as_ref()
     }
 
-    /// Completes the base, then searches for causes on top of it. Observations of weight zero
-    /// take no part: those of the outer fold `held_out` (`None`: the search on all data, which
-    /// also records which candidates the data cannot separate from the base, for the report;
-    /// an outer fold's search only needs its causes). `base_fit`: the fit of the base under
-    /// the weights `w`.
+    /// Completes the base ([`Searcher::next_completion`], one at a time while one is
+    /// significant), then searches for causes on top of it. Observations of weight zero take
+    /// no part: those of the outer fold `held_out` (`None`: the search on all data, which also
+    /// records which candidates the data cannot separate from the base, for the report; an
+    /// outer fold's search only needs its causes). `base_fit`: the fit of the base under the
+    /// weights `w`.
     fn search(
         &self,
         w: &DVec,
@@ -1066,78 +1067,71 @@ impl Searcher<'_> {
         held_out: Option<usize>,
         base_fit: Projector,
     ) -> SearchResult {
-        let (completed, base_fit) = self.complete(base_fit);
+        let mut completed: Vec<Term> = Vec::new();
+        let mut fit = base_fit;
+        while let Some(t) = self.next_completion(&completed, &fit) {
+            fit = fit.extended(&t.columns);
+            completed.push(t);
+        }
         let base: Vec<Term> = self.base.iter().chain(&completed).cloned().collect();
         let mut found = Searcher {
             base: &base,
             ..*self
         }
-        .search_causes(w, folds, held_out, &base_fit);
+        .search_causes(w, folds, held_out, &fit);
+        completed.append(&mut found.completed);
         found.completed = completed;
         found
     }
 
-    /// The base's completion: higher orders of its component errors ([`Candidate::completes_base`]),
-    /// one at a time, the most significant first, while one is significant at
-    /// [`COMPLETION_LEVEL`] (Bonferroni over those eligible), starting from the base's fit
-    /// `base_fit`. Returns the completions and the fit of the completed base (its design: the
-    /// base's, then the completions').
-    fn complete(&self, base_fit: Projector) -> (Vec<Term>, Projector) {
-        let entries: Vec<usize> = (0..self.pool.variants.len())
-            .filter(|&ci| self.candidate(ci).completes_base())
-            .collect();
-        let mut done: Vec<Term> = Vec::new();
-        let mut used = vec![false; self.pool.variants.len()];
-        let mut projector = base_fit;
-        loop {
-            let terms: Vec<&Term> = self.base.iter().chain(&done).collect();
-            let (rss, dof) = (projector.rss_w(), projector.dof());
-            let eligible: Vec<usize> = entries
-                .iter()
-                .copied()
-                .filter(|&ci| {
-                    !used[ci]
-                        && self
-                            .candidate(ci)
-                            .requires()
-                            .is_none_or(|r| terms.iter().any(|t| t.name == r))
-                })
-                .collect();
-            let mut best: Option<(usize, f64)> = None;
-            for &ci in &eligible {
-                let t = &self.pool.variants[ci][0];
-                // A block of orders may hold some the model already has (confounded components
-                // of a point measurement): it is tested on the new directions it brings.
-                let inc = projector.increment(&t.columns);
-                if inc.new_rank == 0 {
-                    used[ci] = true;
-                    continue;
-                }
-                let p = f_test(rss, inc.delta_rss, inc.new_rank, dof);
-                if best.is_none_or(|(_, bp)| p < bp) {
-                    best = Some((ci, p));
-                }
+    /// The next completion of the model whose fit is `fit` (its terms: the base's and
+    /// `model`): the most significant higher order of a base component error
+    /// ([`Candidate::completes_base`]) not in the model, if significant at [`COMPLETION_LEVEL`]
+    /// (Bonferroni over those eligible); only its columns the model does not have yet.
+    fn next_completion(&self, model: &[Term], fit: &Projector) -> Option<Term> {
+        let (rss, dof) = (fit.rss_w(), fit.dof());
+        let terms: Vec<&Term> = self.base.iter().chain(model).collect();
+        let mut eligible = 0usize;
+        let mut tested: Vec<(usize, f64)> = Vec::new();
+        for ci in 0..self.pool.variants.len() {
+            let c = self.candidate(ci);
+            if !c.completes_base()
+                || !c
+                    .requires()
+                    .is_none_or(|r| terms.iter().any(|t| t.name == r))
+            {
+                continue;
             }
-            match best {
-                Some((ci, p)) if p * (eligible.len() as f64) < COMPLETION_LEVEL => {
-                    used[ci] = true;
-                    // Only the block's columns the model does not have yet.
-                    let t = &self.pool.variants[ci][0];
-                    let keep = projector.separable_columns(&t.columns);
-                    if !keep.is_empty() {
-                        let kept = keep_columns(t.clone(), &keep);
-                        projector = projector.extended(&kept.columns);
-                        done.push(kept);
-                    }
-                }
-                _ => break,
+            let t = &self.pool.variants[ci][0];
+            if terms.iter().any(|m| m.name == t.name) {
+                continue;
             }
+            // A block of orders may hold some the model already has (confounded components
+            // of a point measurement): it is tested on the new directions it brings.
+            let inc = fit.increment(&t.columns);
+            if inc.new_rank == 0 {
+                continue;
+            }
+            eligible += 1;
+            tested.push((ci, f_test(rss, inc.delta_rss, inc.new_rank, dof)));
         }
-        (done, projector)
+        tested.sort_by(|a, b| a.1.total_cmp(&b.1));
+        tested
+            .into_iter()
+            .take_while(|&(_, p)| p * (eligible as f64) < COMPLETION_LEVEL)
+            .find_map(|(ci, _)| {
+                let t = &self.pool.variants[ci][0];
+                let keep = fit.separable_columns(&t.columns);
+                (!keep.is_empty()).then(|| keep_columns(t.clone(), &keep))
+            })
     }
 
     /// Forward search, then backward pruning. `held_out` as in [`Searcher::search`];
-    /// `base_fit`: the fit of the base (this searcher's) under the weights `w`.
+    /// `base_fit`: the fit of the base (this searcher's) under the weights `w`. A large cause
+    /// inflates the residuals the base's completion was tested on and can hide an ordinary
+    /// higher order (a rotary axis' 3rd harmonic under a pivot drift), which a periodic cause
+    /// would then stand in for: once a cause is in, the completions are tested again before
+    /// the next cause, and one that enters joins the base (returned as `completed`).
     fn search_causes(
         &self,
         w: &DVec,
@@ -1163,12 +1157,15 @@ impl Searcher<'_> {
         let mut steps = Vec::new();
         let mut not_separable = Vec::new();
         let mut hit_limit = false;
-        let model_terms = |chosen: &[Chosen]| -> Vec<Term> {
+        // Completions that became significant once causes were in: part of the base from then.
+        let mut late: Vec<Term> = Vec::new();
+        let model_terms = |late: &[Term], chosen: &[Chosen]| -> Vec<Term> {
             let mut t = self.base.to_vec();
+            t.extend(late.iter().cloned());
             t.extend(chosen.iter().map(|c| c.term.clone()));
             t
         };
-        let mut terms = model_terms(&chosen);
+        let mut terms = model_terms(&late, &chosen);
         let mut x = design(&terms.iter().collect::<Vec<_>>(), obs.len());
         // The base's products with every variant, for this search's weights; the chosen terms'
         // rows are added at each step.
@@ -1178,6 +1175,19 @@ impl Searcher<'_> {
 
         loop {
             let projector = base_fit.extended_to(&x);
+            // With causes in, a completion the causes' size hid may show: it joins the base
+            // before the next cause is sought. (The causes' periods and time constants are not
+            // refined again for it: a higher order of an ordinary error moves them by a small
+            // fraction of their uncertainty — τ 3289 → 3288 s, u = 59 s, on the 8-cycle bench
+            // dataset — and the next cause's entry refines them all.)
+            if !chosen.is_empty() {
+                if let Some(t) = self.next_completion(&terms[self.base.len()..], &projector) {
+                    late.push(t);
+                    terms = model_terms(&late, &chosen);
+                    x = design(&terms.iter().collect::<Vec<_>>(), obs.len());
+                    continue;
+                }
+            }
             let rss = projector.rss_w();
             // Every variant's `Qᵀ W c`, from the products; a variant a refinement changed is
             // projected directly.
@@ -1448,14 +1458,27 @@ impl Searcher<'_> {
             });
             // Hyper-parameters found with the other effects still in the residuals are biased (an
             // undersampled pitch leaks into the long periods of an irregular grid): refine each
-            // scanned term again with all the others fitted.
-            self.refit_scanned(&mut chosen, base_fit);
-            terms = model_terms(&chosen);
+            // scanned term again with all the others fitted. (A single cause was refined with
+            // the same model in this step.)
+            if chosen.len() > 1 {
+                let base: Vec<Term> = self.base.iter().chain(&late).cloned().collect();
+                Searcher {
+                    base: &base,
+                    ..*self
+                }
+                .refit_scanned(&mut chosen, base_fit);
+            }
+            terms = model_terms(&late, &chosen);
             x = design(&terms.iter().collect::<Vec<_>>(), obs.len());
         }
-        let pruned = self.prune(&mut chosen, folds, base_fit);
+        let base: Vec<Term> = self.base.iter().chain(&late).cloned().collect();
+        let pruned = Searcher {
+            base: &base,
+            ..*self
+        }
+        .prune(&mut chosen, folds, base_fit);
         SearchResult {
-            completed: Vec::new(),
+            completed: late,
             chosen,
             steps,
             not_separable,
@@ -1867,10 +1890,11 @@ fn aliased_harmonic_families(
             };
             let (a, b) = (fine[j.saturating_sub(1)], fine[(j + 1).min(fine.len() - 1)]);
             let rss = |p: f64| profile(&[p], harmonics)[0];
-            let refined = crate::basis::golden_section(a.min(b), a.max(b), 30, rss);
-            let (period, r) = match rss(refined) {
-                r if r < scores[j] => (refined, r),
-                _ => (fine[j], scores[j]),
+            let (refined, r) = crate::basis::bounded_minimum(a, b, 1e-6 * (a - b).abs(), rss);
+            let (period, r) = if r < scores[j] {
+                (refined, r)
+            } else {
+                (fine[j], scores[j])
             };
             let aic = r / s2 + 2.0 * (2 * harmonics + 1) as f64;
             if best.is_none_or(|b| aic < b.0) {
