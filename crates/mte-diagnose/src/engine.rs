@@ -720,6 +720,7 @@ fn conclude(
     compound.extend(drifts);
     compound.extend(drift_shapes(
         obs,
+        candidates,
         &chosen,
         &terms,
         &fit,
@@ -2009,6 +2010,7 @@ fn compound_drifts(findings: &[Finding]) -> Vec<Compound> {
 /// the finding describes a drift of that parameter, not its course.
 fn drift_shapes(
     obs: &Observations,
+    candidates: &[Box<dyn Candidate>],
     chosen: &[Chosen],
     terms: &[Term],
     fit: &Projector,
@@ -2031,7 +2033,12 @@ fn drift_shapes(
         .iter()
         .filter_map(|d| {
             let stem = d.name.split(" drift").next()?;
-            let constant = terms.iter().find(|t| t.name == stem)?.columns.column(0);
+            // The drifting term: in the model, or a combination of model terms (an absolute
+            // location error when the relative ones are in the base).
+            let constant = match terms.iter().find(|t| t.name == stem) {
+                Some(t) => t.columns.column(0).into_owned(),
+                None => library_constant(candidates, obs, stem)?,
+            };
             let mut cols = curve.clone();
             for mut c in cols.column_iter_mut() {
                 c.component_mul_assign(&constant);
@@ -2434,6 +2441,23 @@ fn full_completion(
         .filter(|c| c.completes_base())
         .flat_map(|c| c.variants(obs))
         .find(|t| t.name == name)
+}
+
+/// The column of the library's constant term `name` (a candidate of one single-column variant
+/// that builds on nothing) on all observations.
+fn library_constant(
+    candidates: &[Box<dyn Candidate>],
+    obs: &Observations,
+    name: &str,
+) -> Option<DVec> {
+    candidates
+        .iter()
+        .filter(|c| c.requires().is_none() && !c.completes_base() && c.columns(obs) == 1)
+        .find_map(|c| {
+            let v = c.variants(obs);
+            (v.len() == 1 && v[0].name == name && v[0].width() == 1)
+                .then(|| v[0].columns.column(0).into_owned())
+        })
 }
 
 /// A chosen term (found on a thinned copy) on all observations: the candidate's variant at the
