@@ -751,6 +751,45 @@ impl Machine {
             Joint::Fixed => None,
         }
     }
+    /// The body a swivel head carries directly: when a rotary axis moves `body` on the tool
+    /// branch and no axis moves the next body there (the tool, or a spindle carrying it), that
+    /// next body.
+    pub fn head_carries(&self, body: usize) -> Option<usize> {
+        let k = self.tool_chain.iter().position(|&b| b == body)?;
+        let next = *self.tool_chain.get(k + 1)?;
+        let moved_by = |b: usize| self.axes.iter().find(|a| a.body == b);
+        (moved_by(body)?.kind == AxisKind::Rotary && moved_by(next).is_none()).then_some(next)
+    }
+
+    /// The slots, with their factors, of a translation `component` (δx, δy or δz) of the line
+    /// of the axis that moves `body` (a location error such as `EX0B`): the body's position
+    /// slot; for a swivel head ([`Machine::head_carries`]) with the carried body's same slot at
+    /// −1, so that the line moves against the tool, which keeps its place (a pivot offset, as
+    /// head calibration identifies it; the slot alone would shift the head rigidly, tool
+    /// included, which no measurement of the tool against the table can see). `None` for a
+    /// rotation component or a body without position slots.
+    pub fn line_translation_slots(
+        &self,
+        body: usize,
+        component: Component,
+    ) -> Option<Vec<(usize, f64)>> {
+        if !component.is_translation() {
+            return None;
+        }
+        let slot = |body: usize| {
+            self.slot_index(ErrorSlot {
+                body,
+                kind: SlotKind::Position,
+                component,
+            })
+        };
+        let mut out = vec![(slot(body)?, 1.0)];
+        if let Some(carried) = self.head_carries(body) {
+            out.push((slot(carried)?, -1.0));
+        }
+        Some(out)
+    }
+
     /// Home position (q = 0) of a body's frame origin in the bed frame, mm.
     ///
     /// # Panics

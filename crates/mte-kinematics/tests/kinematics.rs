@@ -687,3 +687,53 @@ mod input_contract {
         );
     }
 }
+
+/// A swivel head's line translation (`line_translation_slots`: the head body's slot, the
+/// carried spindle's at −1) is the pivot moved against the tool: the same tool pose as the
+/// nominal geometry with the head body's offset moved by δ and the spindle's by −δ. The slot
+/// alone moves the tool with the head. The outer head axis, which carries another axis, has
+/// no carried body and keeps its own slot.
+#[test]
+fn a_head_line_translation_is_the_pivot_moved_against_the_tool() {
+    let m = Machine::library("seed000-ca-gantry").unwrap();
+    let body = |name: &str| m.body_index(name).unwrap();
+    let (a, c, spindle) = (body("A"), body("C"), body("spindle"));
+    assert_eq!(m.head_carries(a), Some(spindle));
+    assert_eq!(m.head_carries(c), None);
+    assert_eq!(m.line_translation_slots(a, Component::Ex), None);
+    let delta = 0.02;
+    let mut rng = ChaCha8Rng::seed_from_u64(7);
+    for (component, direction) in [
+        (Component::Dy, Vec3::new(0.0, 1.0, 0.0)),
+        (Component::Dz, Vec3::new(0.0, 0.0, 1.0)),
+    ] {
+        let slots = m.line_translation_slots(a, component).unwrap();
+        assert_eq!(slots.len(), 2);
+        let mut e = vec![0.0; m.n_slots()];
+        for &(s, f) in &slots {
+            e[s] += f * delta;
+        }
+        let moved = m
+            .with_body_offset(a, m.bodies()[a].offset_mm + direction * delta)
+            .with_body_offset(spindle, m.bodies()[spindle].offset_mm - direction * delta);
+        let mut rigid = vec![0.0; m.n_slots()];
+        rigid[slots[0].0] = delta;
+        let mut rigid_differs = false;
+        for _ in 0..20 {
+            let q = random_q(&m, &mut rng);
+            let by_slots = m.tool_in_workpiece(&q, &e);
+            let by_geometry = moved.tool_in_workpiece(&q, &[]);
+            let gap = (by_slots.translation.vector - by_geometry.translation.vector).norm();
+            assert!(gap < 1e-9, "{component:?}: {gap} mm");
+            assert!(rot_gap(&by_slots, &by_geometry) < 1e-12);
+            let shifted = m.tool_in_workpiece(&q, &rigid).translation.vector;
+            rigid_differs |= (shifted - by_slots.translation.vector).norm() > 1e-3 * delta;
+        }
+        assert!(
+            rigid_differs,
+            "{component:?}: the slot alone is the same motion"
+        );
+    }
+    let outer = m.line_translation_slots(c, Component::Dx).unwrap();
+    assert_eq!(outer.len(), 1);
+}

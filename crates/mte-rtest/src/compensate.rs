@@ -28,7 +28,9 @@ pub fn corrected_controller(
         if let ParamKind::Slot(ns) = &e.kind
             && only.is_none_or(|o| o.contains(&ns.iso.as_str()))
         {
-            c[ns.slot] = e.value;
+            for &(slot, factor) in &ns.slots {
+                c[slot] = factor * e.value;
+            }
         }
     }
     c

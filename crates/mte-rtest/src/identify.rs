@@ -46,7 +46,7 @@ impl FitSpec {
     /// As [`squareness_errors`].
     pub fn with_squareness(mut self, m: &Machine) -> Result<FitSpec> {
         for s in squareness_errors(m)? {
-            if !self.params.iter().any(|p| p.slot == s.slot) {
+            if !self.params.iter().any(|p| p.slots == s.slots) {
                 self.params.push(s);
             }
         }
@@ -59,7 +59,7 @@ impl FitSpec {
     pub fn with_names(mut self, m: &Machine, names: &[&str]) -> Result<FitSpec> {
         for n in names {
             let s = slot_by_name(m, n)?;
-            if !self.params.iter().any(|p| p.slot == s.slot) {
+            if !self.params.iter().any(|p| p.slots == s.slots) {
                 self.params.push(s);
             }
         }
@@ -224,7 +224,7 @@ pub fn design_matrix(
         for (j, kind) in kinds.iter().enumerate() {
             for row in 0..3 {
                 a[(3 * i + row, j)] = match kind {
-                    ParamKind::Slot(ns) => cst[(row, ns.slot)],
+                    ParamKind::Slot(ns) => ns.derivative(|slot| cst[(row, slot)]),
                     ParamKind::Nuisance {
                         setup,
                         kind,
@@ -253,7 +253,7 @@ fn unpack(
     let mut nu = vec![SetupNuisance::default(); n_setups];
     for (k, kind) in kinds.iter().enumerate() {
         match kind {
-            ParamKind::Slot(ns) => e[ns.slot] += theta[k],
+            ParamKind::Slot(ns) => ns.add_to(&mut e, theta[k]),
             ParamKind::Nuisance {
                 setup,
                 kind,

@@ -17,16 +17,39 @@ use mte_kinematics::Machine;
 use serde::{Deserialize, Serialize};
 
 /// A named constant error and its slot.
-#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct NamedSlot {
     /// ISO 230-1 name, e.g. "EX0B".
     pub iso: String,
     /// IBS / ISO 10791-6 report name for rotary-axis location errors, e.g. "XOB".
     pub ibs: Option<String>,
-    /// Index into the machine's error vector.
-    pub slot: usize,
+    /// The entries of the machine's error vector the error moves, with their factors: its
+    /// body's slot, and for the line of a swivel head the tool's at −1
+    /// ([`Machine::line_translation_slots`]).
+    pub slots: Vec<(usize, f64)>,
     /// Angular (rad) rather than linear (mm).
     pub angular: bool,
+}
+
+impl NamedSlot {
+    /// The body's own slot, which holds the error's value (for the line of a swivel head the
+    /// tool's slot holds its negative: [`NamedSlot::add_to`] sets both).
+    pub fn slot(&self) -> usize {
+        self.slots[0].0
+    }
+
+    /// Adds `value` (mm or rad) of this error to the error vector `e`.
+    pub fn add_to(&self, e: &mut [f64], value: f64) {
+        for &(slot, factor) in &self.slots {
+            e[slot] += factor * value;
+        }
+    }
+
+    /// The derivative of a reading with respect to this error, from its derivatives with
+    /// respect to the slots (`of_slot`).
+    pub fn derivative(&self, of_slot: impl Fn(usize) -> f64) -> f64 {
+        self.slots.iter().map(|&(slot, f)| f * of_slot(slot)).sum()
+    }
 }
 
 /// Looks up `E<c>0<axis>` on a machine.
@@ -61,11 +84,16 @@ pub fn slot_by_name(m: &Machine, name: &str) -> Result<NamedSlot> {
     let slot = kin::position_slot(m, axis, c)
         .ok_or_else(|| bad("the machine has no constant error slot for this component"))?;
     let rotary = kin::axes(m).iter().any(|a| a.name == axis && a.rotary);
+    // The line of a rotary axis moves against what it carries (on a swivel head, the tool).
+    let slots = rotary
+        .then(|| m.line_translation_slots(m.error_slots()[slot].body, c))
+        .flatten()
+        .unwrap_or_else(|| vec![(slot, 1.0)]);
     let ibs = rotary.then(|| ibs_location_name(c, axis));
     Ok(NamedSlot {
         iso: name.into(),
         ibs,
-        slot,
+        slots,
         angular,
     })
 }

@@ -11,7 +11,7 @@ pub fn machine() -> Machine {
 pub fn errors(m: &Machine, values: &[(&str, f64)]) -> Vec<f64> {
     let mut e = vec![0.0; m.n_slots()];
     for (n, v) in values {
-        e[slot_by_name(m, n).unwrap().slot] += v;
+        slot_by_name(m, n).unwrap().add_to(&mut e, *v);
     }
     e
 }

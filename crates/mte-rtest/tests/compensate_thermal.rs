@@ -71,8 +71,8 @@ fn exponential_drift_model_recovers_tau() {
 fn thermal_tracking_recovers_linear_pivot_drift() {
     let m = machine();
     let (sx, sy) = (
-        mte_rtest::slot_by_name(&m, "EX0B").unwrap().slot,
-        mte_rtest::slot_by_name(&m, "EY0C").unwrap().slot,
+        mte_rtest::slot_by_name(&m, "EX0B").unwrap().slot(),
+        mte_rtest::slot_by_name(&m, "EY0C").unwrap().slot(),
     );
     let n = m.n_slots();
     let rate = -0.005 / 1800.0; // −5 µm in 30 min (Table 3, XOB)

@@ -81,7 +81,7 @@ fn sensitivity_matches_finite_differences() {
         .collect();
     names.extend(["EA0Y", "EC0Y", "EB0Z", "EX0X"].map(String::from));
     for n in names {
-        let slot = mte_rtest::slot_by_name(&m, &n).unwrap().slot;
+        let slot = mte_rtest::slot_by_name(&m, &n).unwrap().slot();
         let mut ep = vec![0.0; m.n_slots()];
         ep[slot] = h;
         let mut em = ep.clone();

@@ -179,35 +179,33 @@ pub(crate) fn slot_effects(
         let axis = machine.slot_axis(j);
         // A head axis' line moves against the tool it carries: its position error is the
         // slot with the tool kept in place (the slot alone shifts the head rigidly).
-        let carried_tool = (slot.kind == SlotKind::Position && c < 3)
-            .then(|| tool_carried_by(machine, slot.body))
-            .flatten();
-        let column_of = |m: &DMat| match carried_tool {
-            Some(tool) => absolute_location_column(machine, m, slot.body, tool, c),
-            None => Some(m.column(j).into_owned()),
+        let slots = (slot.kind == SlotKind::Position
+            && axis.is_some_and(|a| a.kind == AxisKind::Rotary))
+        .then(|| machine.line_translation_slots(slot.body, slot.component))
+        .flatten()
+        .unwrap_or_else(|| vec![(j, 1.0)]);
+        let against_tool = slots.len() > 1;
+        let column_of = |m: &DMat| {
+            slots
+                .iter()
+                .fold(DVec::zeros(m.nrows()), |acc, &(k, f)| acc + m.column(k) * f)
         };
         let column = match (axis.map(|a| a.kind), slot.kind) {
             (Some(AxisKind::Linear), SlotKind::Position) => continue,
-            _ => match column_of(s) {
-                Some(col) => col,
-                None => continue,
-            },
+            _ => column_of(s),
         };
         let axis_k = axis.and_then(|a| machine.axis_index(&a.name));
         let reference = reference.map(|(r, ref_axes)| {
             let coordinate = axis_k
                 .map(|k| ref_axes[k].clone())
                 .unwrap_or_else(|| vec![0.0; column.len()]);
-            (
-                column_of(r).unwrap_or_else(|| DVec::zeros(column.len())),
-                coordinate,
-            )
+            (column_of(r), coordinate)
         });
         if column.amax() < 1e-12 && reference.as_ref().is_none_or(|(r, _)| r.amax() < 1e-12) {
             continue;
         }
         let mut name = slot_name(machine, j);
-        if carried_tool.is_some() {
+        if against_tool {
             name.label = format!("{} (the line against the tool)", name.label);
             name.meaning = format!(
                 "{}; on the head, the axis line is off its place against the tool it carries (pivot offset)",
@@ -305,16 +303,6 @@ fn axis_kind_of(machine: &Machine, body: usize) -> Option<AxisKind> {
         .iter()
         .find(|a| a.body == body)
         .map(|a| a.kind)
-}
-
-/// The body after the rotary axis body `body` on the tool branch, when no axis moves it (the
-/// tool, or a spindle that carries it): the head axis carries the tool directly.
-fn tool_carried_by(machine: &Machine, body: usize) -> Option<usize> {
-    let (next, tool) = next_body(machine, body)?;
-    (tool
-        && axis_kind_of(machine, body) == Some(AxisKind::Rotary)
-        && axis_kind_of(machine, next).is_none())
-    .then_some(next)
 }
 
 /// The body after `body` on its kinematic branch, when it is moved by a rotary axis.

@@ -108,7 +108,7 @@ fn parse_errors(m: &Machine, s: &str) -> Result<Vec<f64>, CliError> {
                 )));
             }
         };
-        e[slot.slot] += v;
+        slot.add_to(&mut e, v);
     }
     Ok(e)
 }

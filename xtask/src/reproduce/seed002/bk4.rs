@@ -32,8 +32,8 @@ fn session(m: &Machine, c_deg: f64) -> Result<PlanItem> {
 /// (where it was measured): EA0B += δ and, since EA0B turns the B body about the machine origin
 /// (`T = P·ΔP·S(q)`), EZ0B −= δ·y so that the point at `y_mm` stays where it was.
 fn tilt_b_line_about(m: &Machine, ctrl: &mut [f64], delta_rad: f64, y_mm: f64) -> Result<()> {
-    ctrl[slot_by_name(m, "EA0B")?.slot] += delta_rad;
-    ctrl[slot_by_name(m, "EZ0B")?.slot] -= delta_rad * y_mm;
+    ctrl[slot_by_name(m, "EA0B")?.slot()] += delta_rad;
+    ctrl[slot_by_name(m, "EZ0B")?.slot()] -= delta_rad * y_mm;
     Ok(())
 }
 
@@ -92,7 +92,7 @@ fn bk4_story<E: ErrorField + ?Sized>(
         },
     )?;
     let fit2 = identify(m, &two.dataset, &spec8)?;
-    let slot = |nm: &str| slot_by_name(m, nm).map(|s| s.slot);
+    let slot = |nm: &str| slot_by_name(m, nm).map(|s| s.slot());
     let (ea_b, ea_c, ez_b) = (slot("EA0B")?, slot("EA0C")?, slot("EZ0B")?);
     let delta_rad = fit2.get("EA0B").map(|e| e.value).unwrap_or(0.0) - with_sq[ea_b];
     // machine Y of the ball in the session: the point where the B line was measured

@@ -74,7 +74,7 @@ fn header(w: &mut String) {
 }
 
 pub(super) fn set(m: &Machine, e: &mut [f64], name: &str, v: f64) -> Result<()> {
-    e[slot_by_name(m, name)?.slot] = v;
+    e[slot_by_name(m, name)?.slot()] = v;
     Ok(())
 }
 

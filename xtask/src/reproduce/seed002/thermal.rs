@@ -36,7 +36,7 @@ pub(super) fn tables_3_4(w: &mut String, m: &Machine, opts: &SimOptions) -> Resu
     ];
     let slots: Vec<usize> = tab
         .iter()
-        .map(|t| slot_by_name(m, t.0).map(|s| s.slot))
+        .map(|t| slot_by_name(m, t.0).map(|s| s.slot()))
         .collect::<Result<_>>()?;
     let interp = |v: &[f64; 3], t: f64| -> f64 {
         let tm = t / 60.0;
