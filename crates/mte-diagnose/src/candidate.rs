@@ -60,7 +60,8 @@ pub trait Candidate: Send + Sync {
     }
 
     /// `true` for a higher order of a component error the base already has ([`Completion`]):
-    /// such terms complete the base before the search and are not causes.
+    /// such terms complete the base (before the search, or once a cause that hid them is in)
+    /// and are not causes.
     fn completes_base(&self) -> bool {
         false
     }
@@ -802,7 +803,8 @@ fn component_columns(obs: &Observations, slot: &SlotEffect, lo: usize, hi: usize
 
 /// A higher order of a component error the base model already has (see
 /// [`BaseModelSpec::completions`]): the base is completed with it when the data ask for it,
-/// before the search for causes; it is never reported as a cause.
+/// before the search for causes or once a cause that hid it is in; it is never reported as a
+/// cause.
 pub struct Completion {
     /// The term.
     pub term: Term,

@@ -260,7 +260,8 @@ pub struct Diagnosis {
     /// Base model parameters as fitted.
     pub base_parameters: Vec<ParameterEstimate>,
     /// Higher orders of the base's component errors that the data asked for (e.g. `EXX P5`),
-    /// added to the base before the search for causes.
+    /// added to the base before the search for causes, or during it once a cause that hid
+    /// them was in.
     pub base_completed: Vec<String>,
     /// Parameters of the stated base model that these data cannot separate from the rest of it
     /// (left out of the fit; their effect is carried by the ones they are confounded with).

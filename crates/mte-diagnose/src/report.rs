@@ -177,7 +177,7 @@ pub fn markdown(d: &Diagnosis, title: &str) -> String {
     if !d.base_completed.is_empty() {
         let _ = writeln!(
             s,
-            "The base model's component errors needed higher orders than stated (added before the search, not causes): {}.\n",
+            "The base model's component errors needed higher orders than stated (added to the base, before the search or once a cause that hid them was in; not causes): {}.\n",
             d.base_completed.join(", ")
         );
     }
