@@ -2431,17 +2431,28 @@ fn pose_widening(
         .collect()
 }
 
+/// The variant called `name` of the library's candidates that `admit` lets through, on all
+/// observations.
+fn library_variant(
+    candidates: &[Box<dyn Candidate>],
+    obs: &Observations,
+    name: &str,
+    admit: impl Fn(&dyn Candidate) -> bool,
+) -> Option<Term> {
+    candidates
+        .iter()
+        .filter(|c| admit(c.as_ref()))
+        .flat_map(|c| c.variants(obs))
+        .find(|t| t.name == name)
+}
+
 /// The base completion called `name` on all observations.
 fn full_completion(
     candidates: &[Box<dyn Candidate>],
     obs: &Observations,
     name: &str,
 ) -> Option<Term> {
-    candidates
-        .iter()
-        .filter(|c| c.completes_base())
-        .flat_map(|c| c.variants(obs))
-        .find(|t| t.name == name)
+    library_variant(candidates, obs, name, |c| c.completes_base())
 }
 
 /// The column of the library's constant term `name` (a candidate of one single-column variant
@@ -2451,14 +2462,10 @@ fn library_constant(
     obs: &Observations,
     name: &str,
 ) -> Option<DVec> {
-    candidates
-        .iter()
-        .filter(|c| c.requires().is_none() && !c.completes_base() && c.columns(obs) == 1)
-        .find_map(|c| {
-            let v = c.variants(obs);
-            (v.len() == 1 && v[0].name == name && v[0].width() == 1)
-                .then(|| v[0].columns.column(0).into_owned())
-        })
+    library_variant(candidates, obs, name, |c| {
+        c.requires().is_none() && !c.completes_base() && c.columns(obs) == 1
+    })
+    .map(|t| t.columns.column(0).into_owned())
 }
 
 /// A chosen term (found on a thinned copy) on all observations: the candidate's variant at the

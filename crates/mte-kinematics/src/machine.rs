@@ -751,31 +751,44 @@ impl Machine {
             Joint::Fixed => None,
         }
     }
+    /// The body after `body` on its kinematic branch, and whether that branch is the tool's.
+    pub fn next_on_branch(&self, body: usize) -> Option<(usize, bool)> {
+        [(&self.tool_chain, true), (&self.wp_chain, false)]
+            .into_iter()
+            .find_map(|(chain, tool)| {
+                let k = chain.iter().position(|&b| b == body)?;
+                chain.get(k + 1).map(|&next| (next, tool))
+            })
+    }
+
+    /// The axis that moves `body`, if one does.
+    pub fn axis_moving(&self, body: usize) -> Option<&Axis> {
+        self.axes.iter().find(|a| a.body == body)
+    }
+
     /// The body a swivel head carries directly: when a rotary axis moves `body` on the tool
     /// branch and no axis moves the next body there (the tool, or a spindle carrying it), that
     /// next body.
     pub fn head_carries(&self, body: usize) -> Option<usize> {
-        let k = self.tool_chain.iter().position(|&b| b == body)?;
-        let next = *self.tool_chain.get(k + 1)?;
-        let moved_by = |b: usize| self.axes.iter().find(|a| a.body == b);
-        (moved_by(body)?.kind == AxisKind::Rotary && moved_by(next).is_none()).then_some(next)
+        let (next, tool) = self.next_on_branch(body)?;
+        (tool
+            && self.axis_moving(body)?.kind == AxisKind::Rotary
+            && self.axis_moving(next).is_none())
+        .then_some(next)
     }
 
-    /// The slots, with their factors, of a translation `component` (δx, δy or δz) of the line
-    /// of the axis that moves `body` (a location error such as `EX0B`): the body's position
-    /// slot; for a swivel head ([`Machine::head_carries`]) with the carried body's same slot at
-    /// −1, so that the line moves against the tool, which keeps its place (a pivot offset, as
-    /// head calibration identifies it; the slot alone would shift the head rigidly, tool
-    /// included, which no measurement of the tool against the table can see). `None` for a
-    /// rotation component or a body without position slots.
-    pub fn line_translation_slots(
+    /// The slots, with their factors, of the position error `component` of `body` (a location
+    /// error such as `EX0B`, a squareness such as `EC0Y`): the body's position slot; for a
+    /// translation of a swivel head's line ([`Machine::head_carries`]) with the carried body's
+    /// same slot at −1, so that the line moves against the tool, which keeps its place (a pivot
+    /// offset, as head calibration identifies it; the slot alone would shift the head rigidly,
+    /// tool included, which no measurement of the tool against the table can see). `None` for
+    /// a body without position slots.
+    pub fn position_error_slots(
         &self,
         body: usize,
         component: Component,
     ) -> Option<Vec<(usize, f64)>> {
-        if !component.is_translation() {
-            return None;
-        }
         let slot = |body: usize| {
             self.slot_index(ErrorSlot {
                 body,
@@ -784,7 +797,10 @@ impl Machine {
             })
         };
         let mut out = vec![(slot(body)?, 1.0)];
-        if let Some(carried) = self.head_carries(body) {
+        if let Some(carried) = self
+            .head_carries(body)
+            .filter(|_| component.is_translation())
+        {
             out.push((slot(carried)?, -1.0));
         }
         Some(out)

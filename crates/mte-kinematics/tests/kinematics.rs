@@ -688,7 +688,7 @@ mod input_contract {
     }
 }
 
-/// A swivel head's line translation (`line_translation_slots`: the head body's slot, the
+/// A swivel head's line translation (`position_error_slots`: the head body's slot, the
 /// carried spindle's at −1) is the pivot moved against the tool: the same tool pose as the
 /// nominal geometry with the head body's offset moved by δ and the spindle's by −δ. The slot
 /// alone moves the tool with the head. The outer head axis, which carries another axis, has
@@ -700,14 +700,15 @@ fn a_head_line_translation_is_the_pivot_moved_against_the_tool() {
     let (a, c, spindle) = (body("A"), body("C"), body("spindle"));
     assert_eq!(m.head_carries(a), Some(spindle));
     assert_eq!(m.head_carries(c), None);
-    assert_eq!(m.line_translation_slots(a, Component::Ex), None);
+    // A tilt of the line is its own slot.
+    assert_eq!(m.position_error_slots(a, Component::Ex).unwrap().len(), 1);
     let delta = 0.02;
     let mut rng = ChaCha8Rng::seed_from_u64(7);
     for (component, direction) in [
         (Component::Dy, Vec3::new(0.0, 1.0, 0.0)),
         (Component::Dz, Vec3::new(0.0, 0.0, 1.0)),
     ] {
-        let slots = m.line_translation_slots(a, component).unwrap();
+        let slots = m.position_error_slots(a, component).unwrap();
         assert_eq!(slots.len(), 2);
         let mut e = vec![0.0; m.n_slots()];
         for &(s, f) in &slots {
@@ -734,6 +735,6 @@ fn a_head_line_translation_is_the_pivot_moved_against_the_tool() {
             "{component:?}: the slot alone is the same motion"
         );
     }
-    let outer = m.line_translation_slots(c, Component::Dx).unwrap();
+    let outer = m.position_error_slots(c, Component::Dx).unwrap();
     assert_eq!(outer.len(), 1);
 }

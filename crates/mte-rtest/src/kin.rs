@@ -2,7 +2,7 @@
 //! goes through here, so the rest of the crate sees one small, stable surface.
 
 use crate::error::RtestError;
-use mte_kinematics::{AxisKind, Component, ErrorSlot, Machine, SlotKind};
+use mte_kinematics::{AxisKind, Machine};
 use mte_linalg::{DMat, Iso3, Mat3, Vec3};
 
 /// What the R-test needs to know about one axis.
@@ -60,15 +60,4 @@ pub(crate) fn apply(g: &Iso3, p: &Vec3) -> Vec3 {
 /// 6 × n_slots Jacobian of the pose error (rows px, py, pz, ox, oy, oz; workpiece frame) at e = 0.
 pub(crate) fn jacobian(m: &Machine, q: &[f64]) -> DMat {
     m.jacobian(q).matrix
-}
-
-/// The slot of a constant (position) error of the body moved by `axis`, component `c`.
-pub(crate) fn position_slot(m: &Machine, axis: &str, c: Component) -> Option<usize> {
-    let i = m.axis_index(axis)?;
-    let body = m.axes()[i].body;
-    m.slot_index(ErrorSlot {
-        body,
-        kind: SlotKind::Position,
-        component: c,
-    })
 }

@@ -25,7 +25,7 @@ pub struct NamedSlot {
     pub ibs: Option<String>,
     /// The entries of the machine's error vector the error moves, with their factors: its
     /// body's slot, and for the line of a swivel head the tool's at −1
-    /// ([`Machine::line_translation_slots`]).
+    /// ([`Machine::position_error_slots`]).
     pub slots: Vec<(usize, f64)>,
     /// Angular (rad) rather than linear (mm).
     pub angular: bool,
@@ -74,21 +74,18 @@ pub fn slot_by_name(m: &Machine, name: &str) -> Result<NamedSlot> {
         }
     })?;
     let angular = c.index() >= 3;
-    if m.axis_index(axis).is_none() {
+    let Some(i) = m.axis_index(axis) else {
         return Err(kin::unknown_axis(
             m,
             axis,
             &format!("in parameter `{name}`"),
         ));
-    }
-    let slot = kin::position_slot(m, axis, c)
+    };
+    // The line of a swivel head moves against the tool it carries.
+    let slots = m
+        .position_error_slots(m.axes()[i].body, c)
         .ok_or_else(|| bad("the machine has no constant error slot for this component"))?;
     let rotary = kin::axes(m).iter().any(|a| a.name == axis && a.rotary);
-    // The line of a rotary axis moves against what it carries (on a swivel head, the tool).
-    let slots = rotary
-        .then(|| m.line_translation_slots(m.error_slots()[slot].body, c))
-        .flatten()
-        .unwrap_or_else(|| vec![(slot, 1.0)]);
     let ibs = rotary.then(|| ibs_location_name(c, axis));
     Ok(NamedSlot {
         iso: name.into(),

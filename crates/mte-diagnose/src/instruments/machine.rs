@@ -179,11 +179,10 @@ pub(crate) fn slot_effects(
         let axis = machine.slot_axis(j);
         // A head axis' line moves against the tool it carries: its position error is the
         // slot with the tool kept in place (the slot alone shifts the head rigidly).
-        let slots = (slot.kind == SlotKind::Position
-            && axis.is_some_and(|a| a.kind == AxisKind::Rotary))
-        .then(|| machine.line_translation_slots(slot.body, slot.component))
-        .flatten()
-        .unwrap_or_else(|| vec![(j, 1.0)]);
+        let slots = (slot.kind == SlotKind::Position)
+            .then(|| machine.position_error_slots(slot.body, slot.component))
+            .flatten()
+            .unwrap_or_else(|| vec![(j, 1.0)]);
         let against_tool = slots.len() > 1;
         let column_of = |m: &DMat| {
             slots
@@ -283,32 +282,10 @@ pub(crate) fn slot_effects(
     out
 }
 
-/// The body after `body` on its kinematic branch, and whether that branch is the tool's.
-fn next_body(machine: &Machine, body: usize) -> Option<(usize, bool)> {
-    [
-        (machine.tool_chain(), true),
-        (machine.workpiece_chain(), false),
-    ]
-    .into_iter()
-    .find_map(|(chain, tool)| {
-        let k = chain.iter().position(|&b| b == body)?;
-        chain.get(k + 1).map(|&next| (next, tool))
-    })
-}
-
-/// The kind of the axis that moves `body`, if one does.
-fn axis_kind_of(machine: &Machine, body: usize) -> Option<AxisKind> {
-    machine
-        .axes()
-        .iter()
-        .find(|a| a.body == body)
-        .map(|a| a.kind)
-}
-
 /// The body after `body` on its kinematic branch, when it is moved by a rotary axis.
 fn rotary_child(machine: &Machine, body: usize) -> Option<usize> {
-    let (child, _) = next_body(machine, body)?;
-    (axis_kind_of(machine, child) == Some(AxisKind::Rotary)).then_some(child)
+    let (child, _) = machine.next_on_branch(body)?;
+    (machine.axis_moving(child)?.kind == AxisKind::Rotary).then_some(child)
 }
 
 /// A location error of a rotary axis that carries another rotary axis exists in two
