@@ -54,6 +54,9 @@ pub struct Outcome {
     /// Candidates the report lists as not separable with these data (a combination of the
     /// model's terms).
     pub not_separable: Vec<String>,
+    /// The periods along each axis the sampling let the diagnosis look for
+    /// ([`mte_diagnose::Diagnosis::periodic_reach`]).
+    pub periodic_reach: Vec<mte_diagnose::engine::PeriodicReach>,
 }
 
 /// One dataset of a study.
@@ -148,6 +151,7 @@ pub fn run_one(spec: &Spec, index: usize, seed: u64, work: &Path) -> Record {
                 .chain(&d.not_separable)
                 .map(|n| n.name.clone())
                 .collect(),
+            periodic_reach: d.periodic_reach.clone(),
         });
     let _ = std::fs::remove_dir_all(&dir);
     Record {
@@ -354,7 +358,7 @@ impl Effect {
             Effect::BTilt => "B tilt EA0B",
             Effect::Sawtooth => "sawtooth positioning of X",
             Effect::RiseFall => "drift rising and falling",
-            Effect::TwoAxis => "X straightness growing with Z",
+            Effect::TwoAxis => "Y positioning changing along X",
         }
     }
 
@@ -546,7 +550,11 @@ pub struct PowerCell {
     /// for an instrument's scale, which no data of its own can separate from a common scale of
     /// the axes, the report's list of what is not separable naming it.
     pub named_as_alternative: usize,
-    /// Of those, datasets whose estimate is within 2 u of the truth.
+    /// Datasets without a finding naming the effect (or an alternative), whose report says
+    /// that the sampling along the effect's axis cannot show its period
+    /// ([`stated_out_of_reach`]).
+    pub out_of_reach: usize,
+    /// Of those named right, datasets whose estimate is within 2 u of the truth.
     pub estimate_within_2u: usize,
     /// Datasets whose findings all name the effect (no other cause) and whose verdict is that
     /// the causes found explain the data.
@@ -620,6 +628,7 @@ pub fn power_with(
                 any_finding: 0,
                 named_right: 0,
                 named_as_alternative: 0,
+                out_of_reach: 0,
                 estimate_within_2u: 0,
                 alone_explained: 0,
                 names: Vec::new(),
@@ -646,12 +655,12 @@ pub fn power_with(
                 } else {
                     let listed = truth.kind == EffectKind::InstrumentScale
                         && o.not_separable.iter().any(|a| names_effect(truth, a));
-                    c.named_as_alternative += usize::from(
-                        listed
-                            || o.findings
-                                .iter()
-                                .any(|f| f.alternatives.iter().any(|a| names_effect(truth, a))),
-                    );
+                    let alternative = listed
+                        || o.findings
+                            .iter()
+                            .any(|f| f.alternatives.iter().any(|a| names_effect(truth, a)));
+                    c.named_as_alternative += usize::from(alternative);
+                    c.out_of_reach += usize::from(!alternative && stated_out_of_reach(truth, o));
                 }
                 all_names.extend(o.findings.iter().map(|f| f.name.clone()));
             }
@@ -659,6 +668,17 @@ pub fn power_with(
             c
         })
         .collect()
+}
+
+/// Whether the report says that the sampling cannot show the effect's period: the effect
+/// repeats along an axis whose periodic reach, as the diagnosis reports it, is limited by the
+/// sampling (too few positions, a regular step) and does not cover the period.
+pub fn stated_out_of_reach(effect: &TrueEffect, o: &Outcome) -> bool {
+    effect.period.as_ref().is_some_and(|(axis, p)| {
+        o.periodic_reach
+            .iter()
+            .any(|r| &r.variable == axis && r.limited_by_sampling() && !r.covers(*p))
+    })
 }
 
 /// What the diagnosis said about an open-world effect.
@@ -676,6 +696,9 @@ pub struct OpenWorldSummary {
     pub errors: usize,
     /// No finding.
     pub nothing: usize,
+    /// Of those, datasets whose report says the sampling cannot show the effect's period
+    /// ([`stated_out_of_reach`]).
+    pub nothing_out_of_reach: usize,
     /// Findings, but the extended model still fails the χ² test (p < 0.01) or its σ0 > 1.5:
     /// the report shows a residual it does not explain.
     pub unexplained: usize,
@@ -723,6 +746,7 @@ pub fn openworld_with(
         n,
         errors: 0,
         nothing: 0,
+        nothing_out_of_reach: 0,
         unexplained: 0,
         shape_stated: 0,
         confident_wrong: 0,
@@ -735,7 +759,14 @@ pub fn openworld_with(
             continue;
         };
         match o.verdict {
-            mte_diagnose::Verdict::NoDiscrepancy => s.nothing += 1,
+            mte_diagnose::Verdict::NoDiscrepancy => {
+                s.nothing += 1;
+                s.nothing_out_of_reach += usize::from(
+                    r.effects
+                        .first()
+                        .is_some_and(|truth| stated_out_of_reach(truth, o)),
+                );
+            }
             mte_diagnose::Verdict::Unexplained => s.unexplained += 1,
             _ if o.compound > 0 => s.shape_stated += 1,
             _ => s.confident_wrong += 1,
@@ -749,13 +780,13 @@ pub fn openworld_with(
 fn power_table(s: &mut String, cells: &[PowerCell]) {
     let _ = writeln!(
         s,
-        "| kind | effect | size | datasets | errors | any finding | named right | else reported as not separable | within 2 u | named alone, explained | most frequent findings |\n|---|---|---|---|---|---|---|---|---|---|---|"
+        "| kind | effect | size | datasets | errors | any finding | named right | else reported as not separable | else period stated out of reach | within 2 u | named alone, explained | most frequent findings |\n|---|---|---|---|---|---|---|---|---|---|---|---|"
     );
     for c in cells {
         let ran = c.n - c.errors;
         let _ = writeln!(
             s,
-            "| {} | {} | {} {} | {} | {} | {} | {} | {} | {} | {} | {} |",
+            "| {} | {} | {} {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |",
             c.kind.name(),
             c.effect.name(),
             c.size,
@@ -765,6 +796,7 @@ fn power_table(s: &mut String, cells: &[PowerCell]) {
             pct(c.any_finding, ran),
             pct(c.named_right, ran),
             pct(c.named_as_alternative, ran),
+            pct(c.out_of_reach, ran),
             pct(c.estimate_within_2u, c.named_right),
             pct(c.alone_explained, ran),
             top(&c.names, 3)
@@ -912,7 +944,10 @@ reported as not separable*: no finding names it, but a finding's alternatives th
 apart do, or — for the tracker's length scale, which the user's model with every axis' scale can \
 never separate from a common scale of X, Y and Z — the report's list of what is not separable \
 names it (that list is the same on clean data: it says what the data cannot show, not that the \
-effect was seen); *within 2 u*: \
+effect was seen); *else period stated out of reach*: neither, and the report's notes say that the \
+sampling along the effect's axis cannot show its period (fewer than six positions, or a regular \
+step whose aliases hide it: `Diagnosis::periodic_reach`; a tracker dataset on a grid of 5–7 X \
+positions cannot show a 5–40 mm pitch, one on scattered targets can); *within 2 u*: \
 of those named right, |estimate − truth| ≤ 2 u (the `amplitude` estimate or the first; \
 magnitudes for periodic amplitudes and squareness, whose sign convention is the engine's; \
 for B tilt and squareness the truth is the machine's total, ordinary + hidden); *named alone, \
@@ -939,21 +974,23 @@ u; with n datasets the binomial standard error is about √(0.05·0.95/n)).\n"
             s,
             "## Open world\n\n\
 Effects no candidate has exactly (sawtooth positioning error, a drift that rises and falls, \
-an X straightness growing with Z). By the diagnosis' verdict: *nothing*: \"no significant \
+a Y positioning error that grows from mid-Y at a rate changing along X, which no rigid-body \
+error of the axes has). By the diagnosis' verdict: *nothing*: \"no significant \
 discrepancy\" (the effect is missed); *unexplained*: structure is reported that nothing in the \
 library explains, with or without the nearest candidates named beside it — the right answer; \
 *shape stated*: causes named, and the report says that some of them are one effect of a form \
 no candidate has (the harmonics of a periodic error that is not a sine; a drift of one \
 parameter that is neither linear nor first-order) — also a right answer; *confident wrong \
 cause*: causes named, the residuals declared consistent with the noise, and no such \
-statement.\n\n\
-| kind | effect | size | datasets | errors | nothing | unexplained | shape stated | confident wrong cause | most frequent findings |\n|---|---|---|---|---|---|---|---|---|---|"
+statement. *of which period stated out of reach*: of the datasets with nothing found, those whose \
+report says that the sampling cannot show the effect's period (as in the power table).\n\n\
+| kind | effect | size | datasets | errors | nothing | of which period stated out of reach | unexplained | shape stated | confident wrong cause | most frequent findings |\n|---|---|---|---|---|---|---|---|---|---|---|"
         );
         for o in &r.openworld {
             let ran = o.n - o.errors;
             let _ = writeln!(
                 s,
-                "| {} | {} | {} {} | {} | {} | {} | {} | {} | {} | {} |",
+                "| {} | {} | {} {} | {} | {} | {} | {} | {} | {} | {} | {} |",
                 o.kind.name(),
                 o.effect.name(),
                 o.size,
@@ -961,6 +998,7 @@ statement.\n\n\
                 o.n,
                 o.errors,
                 pct(o.nothing, ran),
+                pct(o.nothing_out_of_reach, o.nothing),
                 pct(o.unexplained, ran),
                 pct(o.shape_stated, ran),
                 pct(o.confident_wrong, ran),

@@ -69,6 +69,27 @@ fn sin_cos_turns(x: f64) -> (f64, f64) {
     }
 }
 
+/// Fewest distinct positions along an axis for a period scan: a sine has three parameters
+/// (amplitude, phase, period) on top of the polynomial the base already carries there.
+pub(crate) const LEAST_POSITIONS: usize = 6;
+
+/// Highest harmonic of a turn scanned on a rotary axis: 2°, a worm wheel's tooth period.
+const MAX_HARMONIC: usize = 180;
+
+/// The periods the sampling of an axis lets the diagnosis look for ([`periods_to_scan`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct Reach {
+    /// Distinct positions.
+    pub positions: usize,
+    /// Shortest and longest period scanned (mm, or rad for a rotary axis); `None` when the
+    /// sampling allows none (fewer than [`LEAST_POSITIONS`] positions, or a linear axis whose
+    /// shortest resolvable period exceeds half its travel).
+    pub periods: Option<(f64, f64)>,
+    /// The alias period of the positions when it, not the resolution floor, sets the shortest
+    /// period: the positions repeat (nearly) on this step.
+    pub alias: Option<f64>,
+}
+
 /// Periods to scan along an axis.
 ///
 /// For a rotary axis, the harmonics of a turn (an error that repeats every turn has no other
@@ -82,41 +103,17 @@ fn sin_cos_turns(x: f64) -> (f64, f64) {
 /// spacing precisely so that a ball-screw pitch shorter than the mean step is still seen; on a
 /// regular grid of step d the alias period is d and the scan stops at 2.5 d, as Nyquist demands.
 pub(crate) fn periods_to_scan(values: &[f64], rotary: bool) -> Vec<f64> {
-    let mut positions = distinct_sorted(values);
-    if positions.len() < 6 {
+    let Some((lo, hi)) = periodic_reach(values, rotary).periods else {
         return Vec::new();
-    }
-    // A dense record (a continuous log) is judged by at most 20 000 of its positions, evenly by
-    // rank, ends kept: their spacing is still far below the shortest period scanned, and the
-    // alias search stays cheap.
-    const MOST_POSITIONS: usize = 20_000;
-    if positions.len() > MOST_POSITIONS {
-        let last = positions[positions.len() - 1];
-        let step = positions.len().div_ceil(MOST_POSITIONS);
-        positions = positions.into_iter().step_by(step).collect();
-        if positions.last() != Some(&last) {
-            positions.push(last);
-        }
-    }
+    };
     if rotary {
-        const TURN: f64 = std::f64::consts::TAU;
-        const MAX_HARMONIC: usize = 180;
-        let resolvable = alias_period(&positions, TURN / MAX_HARMONIC as f64)
-            .map_or(MAX_HARMONIC, |alias| {
-                (TURN / (2.5 * alias)).floor() as usize
-            });
-        let highest = resolvable.clamp(8, MAX_HARMONIC);
-        return (1..=highest).rev().map(|k| TURN / k as f64).collect();
+        let highest = (std::f64::consts::TAU / lo).round() as usize;
+        return (1..=highest)
+            .rev()
+            .map(|k| std::f64::consts::TAU / k as f64)
+            .collect();
     }
-    let travel = positions[positions.len() - 1] - positions[0];
-    let shortest_resolvable = (travel / 1000.0).max(1.0);
-    let lo = alias_period(&positions, shortest_resolvable)
-        .map_or(shortest_resolvable, |alias| 2.5 * alias)
-        .max(shortest_resolvable);
-    let hi = travel / 2.0;
-    if hi.partial_cmp(&lo) != Some(std::cmp::Ordering::Greater) {
-        return Vec::new();
-    }
+    let travel = 2.0 * hi;
     let df = 0.5 / travel;
     let (f_lo, f_hi) = (1.0 / hi, 1.0 / lo);
     let count = ((f_hi - f_lo) / df).ceil() as usize + 1;
@@ -125,6 +122,57 @@ pub(crate) fn periods_to_scan(values: &[f64], rotary: bool) -> Vec<f64> {
         .collect();
     periods.sort_by(f64::total_cmp);
     periods
+}
+
+/// The range of periods [`periods_to_scan`] covers along an axis sampled at `values`, and what
+/// limits it.
+pub(crate) fn periodic_reach(values: &[f64], rotary: bool) -> Reach {
+    let mut positions = distinct_sorted(values);
+    let count = positions.len();
+    let none = Reach {
+        positions: count,
+        periods: None,
+        alias: None,
+    };
+    if count < LEAST_POSITIONS {
+        return none;
+    }
+    // A dense record (a continuous log) is judged by at most 20 000 of its positions, evenly by
+    // rank, ends kept: their spacing is still far below the shortest period scanned, and the
+    // alias search stays cheap.
+    const MOST_POSITIONS: usize = 20_000;
+    if count > MOST_POSITIONS {
+        let last = positions[count - 1];
+        let step = count.div_ceil(MOST_POSITIONS);
+        positions = positions.into_iter().step_by(step).collect();
+        if positions.last() != Some(&last) {
+            positions.push(last);
+        }
+    }
+    if rotary {
+        const TURN: f64 = std::f64::consts::TAU;
+        let alias = alias_period(&positions, TURN / MAX_HARMONIC as f64);
+        let resolvable = alias.map_or(MAX_HARMONIC, |alias| {
+            (TURN / (2.5 * alias)).floor() as usize
+        });
+        let highest = resolvable.clamp(8, MAX_HARMONIC);
+        return Reach {
+            periods: Some((TURN / highest as f64, TURN)),
+            alias: alias.filter(|_| highest < MAX_HARMONIC),
+            ..none
+        };
+    }
+    let travel = positions[positions.len() - 1] - positions[0];
+    let shortest_resolvable = (travel / 1000.0).max(1.0);
+    let alias = alias_period(&positions, shortest_resolvable)
+        .filter(|alias| 2.5 * alias > shortest_resolvable);
+    let lo = alias.map_or(shortest_resolvable, |alias| 2.5 * alias);
+    let hi = travel / 2.0;
+    Reach {
+        periods: (hi.partial_cmp(&lo) == Some(std::cmp::Ordering::Greater)).then_some((lo, hi)),
+        alias,
+        ..none
+    }
 }
 
 /// The longest period, not shorter than `shortest`, at which the sampling positions are nearly
@@ -380,6 +428,27 @@ mod tests {
     }
 
     #[test]
+    fn reach_names_what_limits_the_scan() {
+        // Six positions on a 100 mm grid: the alias (100 mm) puts the shortest resolvable
+        // period (250 mm) at half the travel, so none is left.
+        let grid: Vec<f64> = (0..=5).map(|i| i as f64 * 100.0).collect();
+        let r = periodic_reach(&grid, false);
+        assert_eq!((r.positions, r.periods), (6, None));
+        // (The first frequency of the scan past the threshold: within a few per cent.)
+        assert!(r.alias.is_some_and(|a| (a - 100.0).abs() < 5.0), "{r:?}");
+        assert!(periods_to_scan(&grid, false).is_empty());
+        // Five positions: too few for any scan.
+        let r = periodic_reach(&grid[..5], false);
+        assert_eq!((r.positions, r.periods, r.alias), (5, None, None));
+        // 24 angles 15° apart: harmonics 1 … 9 (9 × 2.5 × 15° ≤ 360°).
+        let angles: Vec<f64> = (0..24).map(|i| (i as f64 * 15.0).to_radians()).collect();
+        let r = periodic_reach(&angles, true);
+        let (lo, hi) = r.periods.unwrap();
+        assert!((std::f64::consts::TAU / lo - 9.0).abs() < 1e-9 && hi == std::f64::consts::TAU);
+        assert_eq!(periods_to_scan(&angles, true).len(), 9);
+    }
+
+    #[test]
     fn irregular_targets_open_the_scan_below_the_mean_step() {
         // Steps of 20 mm ± 6 mm (hashed, irregular, as ISO 230-2 recommends):
         // no alias above 1 mm, so a 5 mm ball-screw pitch lies inside the scan.
@@ -395,6 +464,7 @@ mod tests {
             })
             .collect();
         assert_eq!(alias_period(&x, 1.0), None);
+        assert_eq!(periodic_reach(&x, false).alias, None);
         let p = periods_to_scan(&x, false);
         assert!(p[0] < 5.0 && p[0] >= 1.0, "shortest period {}", p[0]);
     }

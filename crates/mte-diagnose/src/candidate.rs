@@ -6,7 +6,7 @@ use mte_linalg::{DMat, DVec};
 use crate::basis::{
     Groups, legendre_columns, periods_to_scan, sin_cos_columns, time_constants_to_scan,
 };
-use crate::data::{Observations, VariableKind};
+use crate::data::{Observations, Variable, VariableKind};
 use crate::term::{Family, Quantity, Summary, Term};
 
 /// A candidate extension of the model: one physical cause, possibly with a hyper-parameter
@@ -59,11 +59,10 @@ pub trait Candidate: Send + Sync {
         self.variants(obs).iter().map(|t| t.columns.ncols()).sum()
     }
 
-    /// `true` for a higher order of a component error the base already has ([`Completion`]):
-    /// such terms complete the base (before the search, or once a cause that hid them is in)
-    /// and are not causes.
-    fn completes_base(&self) -> bool {
-        false
+    /// What the diagnosis does with the candidate: a cause to search for (the default), a
+    /// completion of the base, or a structure probe.
+    fn role(&self) -> Role {
+        Role::Cause
     }
 
     /// The candidate on the observations `rows` of `obs` only: a long record is searched on an
@@ -79,16 +78,31 @@ pub trait Candidate: Send + Sync {
                 .map(|t| t.select_rows(rows))
                 .collect(),
             requires: self.requires().map(str::to_string),
-            completes_base: self.completes_base(),
+            role: self.role(),
         })
     }
+}
+
+/// What the diagnosis does with a candidate ([`Candidate::role`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Role {
+    /// A cause the search may name.
+    Cause,
+    /// A higher order of a component error the base already has ([`Completion`]): it
+    /// completes the base (before the search, or once a cause that hid it is in) and is no
+    /// cause.
+    Completion,
+    /// A shape of the residuals that no cause has ([`interaction_probes`]): one more structure
+    /// test, never fitted; when significant the report shows it as structure nothing in the
+    /// library explains.
+    Probe,
 }
 
 /// A candidate's variants on a subset of the observations ([`Candidate::on_rows`]).
 struct Restricted {
     variants: Vec<Term>,
     requires: Option<String>,
-    completes_base: bool,
+    role: Role,
 }
 
 impl Candidate for Restricted {
@@ -100,8 +114,8 @@ impl Candidate for Restricted {
         self.requires.as_deref()
     }
 
-    fn completes_base(&self) -> bool {
-        self.completes_base
+    fn role(&self) -> Role {
+        self.role
     }
 }
 
@@ -722,6 +736,104 @@ impl BaseModelSpec {
     }
 }
 
+/// A structure probe ([`Role::Probe`]): fixed columns, tested, never fitted.
+struct Probe(Term);
+
+impl Candidate for Probe {
+    fn variants(&self, _obs: &Observations) -> Vec<Term> {
+        vec![self.0.clone()]
+    }
+
+    fn role(&self) -> Role {
+        Role::Probe
+    }
+}
+
+/// Structure probes for errors that depend on two linear axes at once: for each pair of
+/// linear axes the data move and each direction in which a component error of either
+/// translates the tool (a positioning or straightness error), that translation as a smooth
+/// function of both coordinates, products `P_i(a)·P_j(b)` of Legendre polynomials with
+/// `i, j ≥ 1` and `i + j ≤ 4`. The rigid-body model has only functions of one axis there
+/// (through lever arms, an angular error of one axis times the other's coordinate, which the
+/// probe's increment over the model leaves out), so what the probe finds is a deformation
+/// (a table that bends or warms unevenly, a gantry that twists) that no candidate has.
+/// Translations along the same direction share their columns: one probe per direction and pair.
+pub(crate) fn interaction_probes(
+    obs: &Observations,
+    slots: &[SlotEffect],
+) -> Vec<Box<dyn Candidate>> {
+    const TOTAL_DEGREE: usize = 4;
+    let linear: Vec<&Variable> = obs
+        .variables
+        .iter()
+        .filter(|v| v.kind == VariableKind::LinearAxis && varies(&v.values))
+        .collect();
+    let translations: Vec<&SlotEffect> = slots
+        .iter()
+        .filter(|s| {
+            s.quantity == Quantity::Length
+                && s.reference.is_none()
+                && matches!(&s.role, SlotRole::Component { axis, positioning, straightness }
+                    if (*positioning || *straightness) && linear.iter().any(|v| &v.name == axis))
+        })
+        .collect();
+    let mut out: Vec<Box<dyn Candidate>> = Vec::new();
+    for (k, a) in linear.iter().enumerate() {
+        for b in &linear[k + 1..] {
+            let mut directions: Vec<&DVec> = Vec::new();
+            for slot in &translations {
+                let SlotRole::Component { axis, .. } = &slot.role else {
+                    continue;
+                };
+                let scale = slot.column.amax();
+                if (axis != &a.name && axis != &b.name)
+                    || scale == 0.0
+                    || directions
+                        .iter()
+                        .any(|d| (*d - &slot.column).amax() <= 1e-9 * scale)
+                {
+                    continue;
+                }
+                directions.push(&slot.column);
+                let pa = legendre_columns(&a.values, 1..=TOTAL_DEGREE - 1);
+                let pb = legendre_columns(&b.values, 1..=TOTAL_DEGREE - 1);
+                let orders: Vec<(usize, usize)> = (1..TOTAL_DEGREE)
+                    .flat_map(|i| (1..=TOTAL_DEGREE - i).map(move |j| (i, j)))
+                    .collect();
+                let columns = DMat::from_fn(obs.len(), orders.len(), |r, c| {
+                    let (i, j) = orders[c];
+                    slot.column[r] * pa[(r, i - 1)] * pb[(r, j - 1)]
+                });
+                // The direction the slot translates the tool in: the second letter of its ISO
+                // name (EYX: the Y straightness of X).
+                let direction = slot.name.chars().nth(1).unwrap_or('?');
+                let name = format!("{direction} error along {} and {}", a.name, b.name);
+                out.push(Box::new(Probe(Term {
+                    coefficients: orders
+                        .iter()
+                        .map(|(i, j)| (format!("{name} P{i}·P{j}"), slot.quantity))
+                        .collect(),
+                    label: format!(
+                        "{direction} error changing with {} and {} jointly",
+                        a.name, b.name
+                    ),
+                    meaning: format!(
+                        "the error in {direction} depends on {} and {} together, which no component error of one axis does (a structure bending or warming unevenly)",
+                        a.name, b.name
+                    ),
+                    name,
+                    family: Family::Custom,
+                    columns,
+                    summary: Summary::EachCoefficient,
+                    exposed_by: Some(a.name.clone()),
+                    separated_by: None,
+                })));
+            }
+        }
+    }
+    out
+}
+
 /// Highest polynomial degree the base's component errors of a linear axis are completed to.
 pub const MAX_COMPONENT_DEGREE: usize = 10;
 
@@ -821,8 +933,8 @@ impl Candidate for Completion {
         self.after.as_deref()
     }
 
-    fn completes_base(&self) -> bool {
-        true
+    fn role(&self) -> Role {
+        Role::Completion
     }
 
     fn on_rows(&self, _obs: &Observations, rows: &[usize]) -> Box<dyn Candidate> {

@@ -10,7 +10,7 @@ use mte_linalg::{DMat, DVec, stats};
 use rayon::prelude::*;
 use serde::Serialize;
 
-use crate::candidate::Candidate;
+use crate::candidate::{Candidate, Role};
 use crate::data::Observations;
 use crate::fit::{
     Directions, Folds, Increment, Projector, SEPARABILITY_TOLERANCE, Solution, block_grams, design,
@@ -169,6 +169,85 @@ pub struct NotSeparable {
     pub separated_by: Option<String>,
 }
 
+/// The periods along one axis that the sampling let the diagnosis look for (the periodic
+/// candidates and the structure tests scan the same range).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct PeriodicReach {
+    /// The axis.
+    pub variable: String,
+    /// Whether it is a rotary axis (periods in rad, harmonics of a turn).
+    pub rotary: bool,
+    /// Distinct positions in the data.
+    pub positions: usize,
+    /// Shortest and longest period looked for (mm, or rad); `None`: none could be.
+    pub periods: Option<(f64, f64)>,
+    /// When the positions repeat on a regular step, that step (mm or rad): a shorter period
+    /// cannot be told from a longer alias, which is what set the shortest period looked for.
+    pub alias_step: Option<f64>,
+}
+
+impl PeriodicReach {
+    /// Whether the sampling, not the library's range, limits the search: too few positions, or
+    /// a regular step that hides the shorter periods.
+    pub fn limited_by_sampling(&self) -> bool {
+        self.periods.is_none() || self.alias_step.is_some()
+    }
+
+    /// Whether a periodic error of period `p` (mm or rad) lies inside the range looked for.
+    pub fn covers(&self, p: f64) -> bool {
+        self.periods.is_some_and(|(lo, hi)| (lo..=hi).contains(&p))
+    }
+
+    /// The sentence a report gives when the sampling limits the search.
+    fn note(&self) -> Option<String> {
+        let v = &self.variable;
+        // (The alias step comes from a frequency scan: good to a few per cent.)
+        let step = |a: f64| {
+            if self.rotary {
+                format!("about {:.0}°", a.to_degrees())
+            } else {
+                format!("about {a:.0} mm")
+            }
+        };
+        match (self.periods, self.alias_step) {
+            (None, _) if self.positions < crate::basis::LEAST_POSITIONS => Some(format!(
+                "{v} takes only {} distinct positions: periodic errors along {v} (a ball-screw pitch, an encoder or gear error) could not be looked for, at least {} are needed; the base's polynomial carries what such an error does at these positions",
+                self.positions,
+                crate::basis::LEAST_POSITIONS
+            )),
+            (None, Some(a)) => Some(format!(
+                "the {v} positions repeat on a step of {}, too coarse for any period shorter than half the travel: periodic errors along {v} (a ball-screw pitch, an encoder or gear error) alias to smooth ones and could not be looked for; irregular steps, as ISO 230-2 prescribes, or more positions would show them",
+                step(a)
+            )),
+            (None, None) => Some(format!(
+                "{v}'s travel is too short for two periods of any period its sampling resolves: periodic errors along {v} could not be looked for"
+            )),
+            (Some((lo, _)), Some(a)) if self.rotary => Some(format!(
+                "the {v} positions repeat on a step of {}: harmonics of a turn above the {} ({:.1}°) alias to lower ones and could not be looked for (worm-gear tooth errors among them); more, irregularly spaced angles would show them",
+                step(a),
+                ordinal((std::f64::consts::TAU / lo).round() as usize),
+                lo.to_degrees()
+            )),
+            (Some((lo, _)), Some(a)) => Some(format!(
+                "the {v} positions repeat on a step of {}: periodic errors along {v} shorter than {lo:.1} mm alias to longer ones and could not be looked for (a ball-screw pitch among them); irregular steps, as ISO 230-2 prescribes, or more positions would show them",
+                step(a)
+            )),
+            (Some(_), None) => None,
+        }
+    }
+}
+
+fn ordinal(k: usize) -> String {
+    let suffix = match (k % 10, k % 100) {
+        (_, 11..=13) => "th",
+        (1, _) => "st",
+        (2, _) => "nd",
+        (3, _) => "rd",
+        _ => "th",
+    };
+    format!("{k}{suffix}")
+}
+
 /// A scored candidate of one step.
 #[derive(Debug, Clone, Serialize)]
 pub struct CandidateScore {
@@ -257,6 +336,9 @@ pub struct Diagnosis {
     pub incomplete: Option<String>,
     /// What these data cannot test (e.g. no pose measured twice: no time effects).
     pub notes: Vec<String>,
+    /// The periods along each axis that the sampling let the search and the structure tests
+    /// look for ([`Diagnosis::notes`] states where the sampling limits them).
+    pub periodic_reach: Vec<PeriodicReach>,
     /// Base model parameters as fitted.
     pub base_parameters: Vec<ParameterEstimate>,
     /// Higher orders of the base's component errors that the data asked for (e.g. `EXX P5`),
@@ -464,6 +546,12 @@ fn conclude(
             c.term = full_variant(candidates[c.candidate].as_ref(), obs, c);
         }
     }
+    // The structure probes, on all observations.
+    let probes: Vec<Term> = candidates
+        .iter()
+        .filter(|c| c.role() == Role::Probe)
+        .flat_map(|c| c.variants(obs))
+        .collect();
     let everything = vec![true; n];
     let folds = Folds::blocked(obs, &everything, params.folds, params.blocks_per_fold);
     let no_pool = Pool::default();
@@ -501,6 +589,7 @@ fn conclude(
         base_sol.rss_w,
         base_sol.dof(),
         thinned,
+        &probes,
     );
 
     // The final model. A cause whose size the data do not determine once the uncertainty of its
@@ -658,6 +747,7 @@ fn conclude(
         sol.rss_w,
         sol.dof(),
         thinned,
+        &probes,
     )
     .into_iter()
     .filter(|t| t.is_significant(params.alpha))
@@ -687,6 +777,28 @@ fn conclude(
             });
         }
     }
+    let periodic_reach: Vec<PeriodicReach> = obs
+        .variables
+        .iter()
+        .filter(|v| {
+            matches!(
+                v.kind,
+                crate::data::VariableKind::LinearAxis | crate::data::VariableKind::RotaryAxis
+            ) && crate::candidate::varies(&v.values)
+        })
+        .map(|v| {
+            let rotary = v.kind == crate::data::VariableKind::RotaryAxis;
+            let reach = crate::basis::periodic_reach(&v.values, rotary);
+            PeriodicReach {
+                variable: v.name.clone(),
+                rotary,
+                positions: reach.positions,
+                periods: reach.periods,
+                alias_step: reach.alias,
+            }
+        })
+        .collect();
+    notes.extend(periodic_reach.iter().filter_map(PeriodicReach::note));
     if obs.setup_names.len() == 1 {
         notes.push(format!(
             "one {}: errors that differ between {}s cannot be told from errors common to all",
@@ -748,6 +860,7 @@ fn conclude(
         verdict,
         incomplete,
         notes,
+        periodic_reach,
         base_parameters,
         base_completed,
         base_not_separable,
@@ -870,6 +983,9 @@ impl Pool {
         let built: Vec<Vec<Term>> = candidates
             .par_iter()
             .map(|c| {
+                if c.role() == Role::Probe {
+                    return Vec::new();
+                }
                 c.variants(obs)
                     .into_iter()
                     .filter(|t| !t.is_invisible() && t.columns.nrows() == n)
@@ -1088,7 +1204,7 @@ impl Searcher<'_> {
 
     /// The next completion of the model whose fit is `fit` (its terms: the base's and
     /// `model`): the most significant higher order of a base component error
-    /// ([`Candidate::completes_base`]) not in the model, if significant at [`COMPLETION_LEVEL`]
+    /// ([`Role::Completion`]) not in the model, if significant at [`COMPLETION_LEVEL`]
     /// (Bonferroni over those eligible); only its columns the model does not have yet.
     fn next_completion(&self, model: &[Term], fit: &Projector) -> Option<Term> {
         let (rss, dof) = (fit.rss_w(), fit.dof());
@@ -1097,7 +1213,7 @@ impl Searcher<'_> {
         let mut tested: Vec<(usize, f64)> = Vec::new();
         for ci in 0..self.pool.variants.len() {
             let c = self.candidate(ci);
-            if !c.completes_base()
+            if c.role() != Role::Completion
                 || !c
                     .requires()
                     .is_none_or(|r| terms.iter().any(|t| t.name == r))
@@ -1224,7 +1340,7 @@ impl Searcher<'_> {
             let eligible: Vec<usize> = (0..entries)
                 .filter(|&ci| {
                     !used[ci]
-                        && !self.candidate(ci).completes_base()
+                        && self.candidate(ci).role() == Role::Cause
                         && self.candidate(ci).requires().is_none_or(present)
                 })
                 .collect();
@@ -2452,7 +2568,7 @@ fn full_completion(
     obs: &Observations,
     name: &str,
 ) -> Option<Term> {
-    library_variant(candidates, obs, name, |c| c.completes_base())
+    library_variant(candidates, obs, name, |c| c.role() == Role::Completion)
 }
 
 /// The column of the library's constant term `name` (a candidate of one single-column variant
@@ -2463,7 +2579,7 @@ fn library_constant(
     name: &str,
 ) -> Option<DVec> {
     library_variant(candidates, obs, name, |c| {
-        c.requires().is_none() && !c.completes_base() && c.columns(obs) == 1
+        c.requires().is_none() && c.role() == Role::Cause && c.columns(obs) == 1
     })
     .map(|t| t.columns.column(0).into_owned())
 }

@@ -13,7 +13,7 @@ pub mod structure;
 pub mod term;
 
 pub use candidate::{
-    Alternatives, BaseModelSpec, Candidate, ComponentSpec, Requires, SlotEffect, SlotRole,
+    Alternatives, BaseModelSpec, Candidate, ComponentSpec, Requires, Role, SlotEffect, SlotRole,
     physical_effects,
 };
 pub use data::{Observations, Variable, VariableKind};

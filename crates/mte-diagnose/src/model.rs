@@ -187,6 +187,7 @@ pub fn prepare(
     let mut candidates = physical_effects(&observations, &errors, &drifting);
     candidates.extend(effects.candidates);
     candidates.extend(completions);
+    candidates.extend(crate::candidate::interaction_probes(&observations, &errors));
     Ok(Prepared {
         observations,
         base,

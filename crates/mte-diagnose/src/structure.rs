@@ -9,6 +9,7 @@ use serde::Serialize;
 use crate::basis::{Groups, legendre_columns, periods_to_scan, sin_cos_columns};
 use crate::data::{Observations, Variable, VariableKind};
 use crate::fit::{Projector, select, select_rows};
+use crate::term::Term;
 use rayon::prelude::*;
 
 /// One test of the residuals.
@@ -40,7 +41,8 @@ impl StructureTest {
 }
 
 /// Runs every structure test on the residuals `r` of the model whose design is `x` and fit
-/// `projector` ([`Projector::fit`]). On a long
+/// `projector` ([`Projector::fit`]), the library's structure probes `probes`
+/// ([`crate::Role::Probe`]) among them, each on the channels its columns touch. On a long
 /// record the period scans choose their period on the observations `scan_rows` (evenly thinned)
 /// and test it on all; the Bonferroni factor counts the whole scan either way.
 #[allow(clippy::too_many_arguments)]
@@ -53,6 +55,7 @@ pub(crate) fn structure_tests(
     rss_w: f64,
     dof: usize,
     scan_rows: Option<&[usize]>,
+    probes: &[Term],
 ) -> Vec<StructureTest> {
     // Where the period scans run: all observations, or the thinned ones.
     let thin = scan_rows.map(|rows| {
@@ -83,15 +86,18 @@ pub(crate) fn structure_tests(
             })
             .collect()
     });
+    // A test on one channel, or (`None`) on all observations.
     let run = |variable: &str,
-               channel: usize,
+               channel: Option<usize>,
                test: &str,
                cols: DMat,
                period: Option<(f64, &str)>,
                inner: f64|
      -> Option<(StructureTest, f64)> {
-        let c = select_rows(&cols, &rows[channel]);
-        let inc = projectors[channel].increment(&c);
+        let inc = match channel {
+            Some(ch) => projectors[ch].increment(&select_rows(&cols, &rows[ch])),
+            None => projector.increment(&cols),
+        };
         if inc.new_rank == 0 || dof <= inc.new_rank {
             return None;
         }
@@ -102,7 +108,10 @@ pub(crate) fn structure_tests(
         Some((
             StructureTest {
                 variable: variable.to_string(),
-                channel: obs.channel_names[channel].clone(),
+                channel: channel.map_or_else(
+                    || "all channels".to_string(),
+                    |ch| obs.channel_names[ch].clone(),
+                ),
                 test: test.to_string(),
                 f_statistic: f,
                 p_value: p,
@@ -126,7 +135,7 @@ pub(crate) fn structure_tests(
                 k - 1,
                 |i, j| if obs.setup[i] == j + 1 { 1.0 } else { 0.0 },
             );
-            return run("setup", ch, "setup", cols, None, 1.0)
+            return run("setup", Some(ch), "setup", cols, None, 1.0)
                 .into_iter()
                 .collect();
         };
@@ -135,7 +144,7 @@ pub(crate) fn structure_tests(
             VariableKind::LinearAxis | VariableKind::RotaryAxis | VariableKind::Time => {
                 out.extend(run(
                     &v.name,
-                    ch,
+                    Some(ch),
                     "trend (cubic)",
                     legendre_columns(&v.values, 1..=3),
                     None,
@@ -167,7 +176,7 @@ pub(crate) fn structure_tests(
                     if let Some((p, _)) = best {
                         out.extend(run(
                             &v.name,
-                            ch,
+                            Some(ch),
                             "periodic",
                             sin_cos_columns(&v.values, p),
                             Some((p, if rotary { "°" } else { "mm" })),
@@ -179,7 +188,7 @@ pub(crate) fn structure_tests(
             VariableKind::Direction => {
                 out.extend(run(
                     &v.name,
-                    ch,
+                    Some(ch),
                     "direction",
                     DMat::from_column_slice(n, 1, &v.values),
                     None,
@@ -198,13 +207,36 @@ pub(crate) fn structure_tests(
                 .chain((obs.setup_names.len() > 1).then_some((ch, None)))
         })
         .collect();
-    let raw: Vec<(StructureTest, f64)> = jobs
+    let mut raw: Vec<(StructureTest, f64)> = jobs
         .par_iter()
         .map(|&(ch, v)| tests_of(ch, v))
         .collect::<Vec<_>>()
         .into_iter()
         .flatten()
         .collect();
+    // The probes: on the one channel their columns touch, else on all observations.
+    raw.extend(
+        probes
+            .par_iter()
+            .filter_map(|p| {
+                let touched: Vec<usize> = channels
+                    .iter()
+                    .copied()
+                    .filter(|&ch| {
+                        rows[ch]
+                            .iter()
+                            .any(|&i| p.columns.row(i).iter().any(|&v| v != 0.0))
+                    })
+                    .collect();
+                let channel = match touched[..] {
+                    [ch] => Some(ch),
+                    _ => None,
+                };
+                let variable = p.exposed_by.clone().unwrap_or_default();
+                run(&variable, channel, &p.label, p.columns.clone(), None, 1.0)
+            })
+            .collect::<Vec<_>>(),
+    );
     let total: f64 = raw.iter().map(|(_, inner)| inner).sum();
     raw.into_iter()
         .map(|(mut t, inner)| {

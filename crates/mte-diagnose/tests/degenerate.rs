@@ -96,6 +96,53 @@ fn variables_without_spread_are_not_a_panic() {
 }
 
 #[test]
+fn a_regular_grid_says_which_periods_it_cannot_show() {
+    // X on a 10 mm grid (60 positions, 590 mm): a pitch shorter than 25 mm aliases; the report
+    // says so, and the scan covers 25–295 mm.
+    let mut obs = runs(|i| i as f64);
+    let d = diagnose(
+        &obs,
+        vec![offset(obs.len())],
+        &[],
+        &DiagnoseParams::default(),
+    )
+    .expect("diagnosis runs");
+    let x = d.periodic_reach.iter().find(|r| r.variable == "X").unwrap();
+    let (lo, hi) = x.periods.expect("X has periods to scan");
+    assert!(
+        (lo - 25.0).abs() < 0.5 && (hi - 295.0).abs() < 1e-9,
+        "{lo} {hi}"
+    );
+    assert!(x.alias_step.is_some_and(|a| (a - 10.0).abs() < 0.2));
+    assert!(x.limited_by_sampling() && x.covers(30.0) && !x.covers(20.0));
+    assert!(
+        d.notes.iter().any(|n| n.contains(
+            "the X positions repeat on a step of about 10 mm: periodic errors along X shorter than 25"
+        )),
+        "{:?}",
+        d.notes
+    );
+    // Five positions: no period at all.
+    obs.variables[0].values = (0..obs.len()).map(|i| (i % 5) as f64 * 100.0).collect();
+    let d = diagnose(
+        &obs,
+        vec![offset(obs.len())],
+        &[],
+        &DiagnoseParams::default(),
+    )
+    .expect("diagnosis runs");
+    let x = d.periodic_reach.iter().find(|r| r.variable == "X").unwrap();
+    assert_eq!((x.positions, x.periods), (5, None));
+    assert!(
+        d.notes
+            .iter()
+            .any(|n| n.contains("X takes only 5 distinct positions")),
+        "{:?}",
+        d.notes
+    );
+}
+
+#[test]
 fn significance_level_outside_zero_to_one_half_is_an_error() {
     let obs = runs(|i| i as f64);
     for alpha in [0.0, 0.5, 2.0, f64::NAN, f64::INFINITY] {

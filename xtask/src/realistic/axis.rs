@@ -73,6 +73,7 @@ pub(crate) fn write(spec: &Spec, rng: &mut ChaCha8Rng, dir: &Path) -> std::io::R
             unit: "um",
             value: ordinary_reversal_um * 1e-3,
             signed: true,
+            period: None,
             detail: "ordinary reversal".into(),
         });
     }
@@ -96,6 +97,7 @@ pub(crate) fn write(spec: &Spec, rng: &mut ChaCha8Rng, dir: &Path) -> std::io::R
                     unit: "um",
                     value: amplitude_um.abs() * 1e-3,
                     signed: false,
+                    period: Some(("X".into(), period_mm)),
                     detail: format!("period {period_mm:.2} mm"),
                 });
             }
@@ -108,6 +110,7 @@ pub(crate) fn write(spec: &Spec, rng: &mut ChaCha8Rng, dir: &Path) -> std::io::R
                     unit: "um",
                     value: 0.0, // set below: the total
                     signed: true,
+                    period: None,
                     detail: String::new(),
                 });
             }
@@ -120,6 +123,7 @@ pub(crate) fn write(spec: &Spec, rng: &mut ChaCha8Rng, dir: &Path) -> std::io::R
                     unit: "um/min",
                     value: um_per_min * 1e-3 / 60.0,
                     signed: true,
+                    period: None,
                     detail: "linear drift of the zero".into(),
                 });
             }
@@ -139,6 +143,7 @@ pub(crate) fn write(spec: &Spec, rng: &mut ChaCha8Rng, dir: &Path) -> std::io::R
                     unit: "um",
                     value: amplitude_um.abs() * 1e-3,
                     signed: false,
+                    period: Some(("X".into(), period_mm)),
                     detail: format!("sawtooth, period {period_mm:.2} mm"),
                 });
             }
@@ -159,6 +164,7 @@ pub(crate) fn write(spec: &Spec, rng: &mut ChaCha8Rng, dir: &Path) -> std::io::R
                     unit: "um",
                     value: um * 1e-3,
                     signed: true,
+                    period: None,
                     detail: format!("rise and fall of the zero, peak at {tau_s:.0} s"),
                 });
             }

@@ -152,8 +152,10 @@ pub enum Hidden {
         /// plus the mean pause between cycles, the pauses being drawn as the cycles are).
         peak: f64,
     },
-    /// Open world: X straightness (tip deviation in Y) whose size grows with Z: a smooth shape
-    /// of x with peak `um` at the bottom of the Z stroke and zero at its top (tracker).
+    /// Open world: a Y positioning error growing linearly from mid-Y, at a rate that changes
+    /// along X (a table warmed unevenly stretches Y more on one side): a smooth shape of x with
+    /// peak `um` at the ends of Y (tracker). (An X straightness growing linearly with Z would
+    /// not do: that is the roll of X through the Z lever arm, which the standard model has.)
     TwoAxis {
         /// Peak, µm.
         um: f64,
@@ -211,6 +213,9 @@ pub struct TrueEffect {
     pub signed: bool,
     /// Free text (period, time constant …).
     pub detail: String,
+    /// For an effect that repeats along an axis: the axis and the period (mm, or rad for a
+    /// rotary axis).
+    pub period: Option<(String, f64)>,
 }
 
 /// What the generator put into a dataset (kept in memory, never written).

@@ -390,6 +390,7 @@ pub(crate) fn write(spec: &Spec, rng: &mut ChaCha8Rng, dir: &Path) -> std::io::R
                     unit: "um",
                     value: um * 1e-3,
                     signed: true,
+                    period: None,
                     detail: format!("first order, τ = {tau_s:.0} s"),
                 });
             }
@@ -404,6 +405,7 @@ pub(crate) fn write(spec: &Spec, rng: &mut ChaCha8Rng, dir: &Path) -> std::io::R
                     unit: "um",
                     value: um * 1e-3,
                     signed: true,
+                    period: None,
                     detail: format!(
                         "rise and fall, peak at {:.0} % of the measuring time",
                         100.0 * peak
@@ -424,6 +426,7 @@ pub(crate) fn write(spec: &Spec, rng: &mut ChaCha8Rng, dir: &Path) -> std::io::R
                     unit: "urad",
                     value: urad.abs() * 1e-6,
                     signed: false,
+                    period: Some((["B", "C"][rotary].into(), TAU / harmonic as f64)),
                     detail: format!("harmonic {harmonic} of a turn"),
                 });
             }
@@ -436,6 +439,7 @@ pub(crate) fn write(spec: &Spec, rng: &mut ChaCha8Rng, dir: &Path) -> std::io::R
                     unit: "urad",
                     value: 0.0, // the total, set below
                     signed: true,
+                    period: None,
                     detail: String::new(),
                 });
             }
@@ -448,6 +452,7 @@ pub(crate) fn write(spec: &Spec, rng: &mut ChaCha8Rng, dir: &Path) -> std::io::R
                     unit: "urad",
                     value: m.squareness[pair].abs(),
                     signed: false,
+                    period: None,
                     detail: String::new(),
                 });
             }
@@ -478,6 +483,7 @@ pub(crate) fn write(spec: &Spec, rng: &mut ChaCha8Rng, dir: &Path) -> std::io::R
         unit,
         value: v,
         signed: true,
+        period: None,
         detail: "ordinary (+ hidden)".into(),
     })
     .collect();

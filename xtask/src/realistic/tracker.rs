@@ -66,7 +66,9 @@ pub struct TrackerMachine {
     pub squareness: [f64; 3],
     /// Extra positioning errors per axis.
     pub waves: [Vec<Wave>; 3],
-    /// Open world: X straightness in Y growing towards the bottom of Z: peak mm and shape of x.
+    /// Open world: a Y positioning error proportional to the distance from mid-Y whose size
+    /// changes along X (peak mm at the ends of Y, shape of x): no rigid-body error of the axes
+    /// has it (a yaw of Y gives x·f(y), a yaw of X moves the tip along X in proportion to Y).
     pub two_axis: Option<(f64, Smooth)>,
 }
 
@@ -125,8 +127,8 @@ impl TrackerMachine {
             .translation
             .vector;
         if let Some((peak, shape)) = &self.two_axis {
-            let (lo, hi) = self.strokes[2];
-            p.y += peak * shape.at(q[0]) * (hi - q[2]) / (hi - lo);
+            let (lo, hi) = self.strokes[1];
+            p.y += peak * shape.at(q[0]) * (2.0 * (q[1] - lo) / (hi - lo) - 1.0);
         }
         p
     }
@@ -282,6 +284,7 @@ pub(crate) fn write(spec: &Spec, rng: &mut ChaCha8Rng, dir: &Path) -> std::io::R
                     unit: "um",
                     value: amplitude_um.abs() * 1e-3,
                     signed: false,
+                    period: Some((LINEAR[axis].to_string(), period_mm)),
                     detail: format!(
                         "{} period {period_mm:.2} mm",
                         if saw { "sawtooth" } else { "sine" }
@@ -297,6 +300,7 @@ pub(crate) fn write(spec: &Spec, rng: &mut ChaCha8Rng, dir: &Path) -> std::io::R
                     unit: "urad",
                     value: 0.0, // the total, set below
                     signed: false,
+                    period: None,
                     detail: String::new(),
                 });
             }
@@ -309,6 +313,7 @@ pub(crate) fn write(spec: &Spec, rng: &mut ChaCha8Rng, dir: &Path) -> std::io::R
                     unit: "ppm",
                     value: ppm * 1e-6,
                     signed: true,
+                    period: None,
                     detail: String::new(),
                 });
             }
@@ -316,13 +321,14 @@ pub(crate) fn write(spec: &Spec, rng: &mut ChaCha8Rng, dir: &Path) -> std::io::R
                 let shape = Smooth::draw(rng, strokes[0].0, strokes[0].1, 1.0);
                 m.two_axis = Some((um * 1e-3, shape));
                 effects.push(TrueEffect {
-                    iso_name_hint: "EYX".into(),
+                    iso_name_hint: "EYY".into(),
                     kind: EffectKind::OpenWorld,
                     size: um,
                     unit: "um",
                     value: um.abs() * 1e-3,
                     signed: false,
-                    detail: "X straightness in Y growing with Z".into(),
+                    period: None,
+                    detail: "Y positioning error changing along X".into(),
                 });
             }
             _ => return Err(unsupported(Kind::Tracker, h)),
@@ -345,6 +351,7 @@ pub(crate) fn write(spec: &Spec, rng: &mut ChaCha8Rng, dir: &Path) -> std::io::R
             unit: "urad",
             value: m.squareness[k],
             signed: false,
+            period: None,
             detail: "ordinary + hidden".into(),
         })
         .collect();
