@@ -92,9 +92,9 @@ pub enum Role {
     /// completes the base (before the search, or once a cause that hid it is in) and is no
     /// cause.
     Completion,
-    /// A shape of the residuals that no cause has ([`interaction_probes`]): one more structure
-    /// test, never fitted; when significant the report shows it as structure nothing in the
-    /// library explains.
+    /// A shape of the residuals that no cause has (the library's: a component error changing
+    /// with two linear axes at once): one more structure test, never fitted; when significant
+    /// the report shows it as structure nothing in the library explains.
     Probe,
 }
 
