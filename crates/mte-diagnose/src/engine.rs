@@ -287,8 +287,12 @@ pub struct ResidualSeries {
     pub channel: Vec<usize>,
     /// Residuals of the final model with this finding left out, mm.
     pub residual: Vec<f64>,
-    /// The finding's fitted effect at each observation, mm (zero for unexplained structure).
+    /// The finding's fitted effect at each observation, mm; for unexplained structure, the
+    /// dependence its structure test found, fitted to the final residuals.
     pub effect: Vec<f64>,
+    /// For unexplained structure, the structure test shown (`periodic`, `Y error changing with
+    /// X and Y jointly` …).
+    pub structure: Option<String>,
 }
 
 /// Findings that together describe one effect of a form no single candidate has: the harmonics
@@ -849,6 +853,8 @@ fn conclude(
         &sol,
         base.iter().map(Term::width).sum(),
         &remaining_structure,
+        &fit,
+        &probes,
     );
     Ok(Diagnosis {
         observations: n,
@@ -2896,6 +2902,7 @@ fn group_rms(r: &DVec, group: &[usize], k: usize) -> Vec<f64> {
 /// The evidence behind each finding: the final model's residuals with the finding's fitted
 /// effect added back, against the covariate that exposes it; and, for structure nothing
 /// explains, the final residuals against the covariate of the most significant test.
+#[allow(clippy::too_many_arguments)]
 fn residual_series(
     obs: &Observations,
     findings: &[Finding],
@@ -2903,6 +2910,8 @@ fn residual_series(
     sol: &Solution,
     base_width: usize,
     remaining: &[StructureTest],
+    fit: &Projector,
+    probes: &[Term],
 ) -> Vec<ResidualSeries> {
     let covariate = |name: &str| -> Option<Vec<f64>> {
         if name == "setup" {
@@ -2927,6 +2936,7 @@ fn residual_series(
             channel: obs.channel.clone(),
             residual: (&sol.residuals + &effect).as_slice().to_vec(),
             effect: effect.as_slice().to_vec(),
+            structure: None,
         });
     }
     if let Some(s) = remaining
@@ -2934,13 +2944,19 @@ fn residual_series(
         .min_by(|a, b| a.p_value.total_cmp(&b.p_value))
     {
         if let Some(x) = covariate(&s.variable) {
+            // The dependence the test found, as fitted to the final residuals.
+            let effect = crate::structure::test_columns(obs, s, probes).map_or_else(
+                || vec![0.0; obs.len()],
+                |c| fit.fitted_along(&c).as_slice().to_vec(),
+            );
             out.push(ResidualSeries {
                 variable: s.variable.clone(),
                 finding: None,
                 x,
                 channel: obs.channel.clone(),
                 residual: sol.residuals.as_slice().to_vec(),
-                effect: vec![0.0; obs.len()],
+                effect,
+                structure: Some(s.test.clone()),
             });
         }
     }

@@ -695,6 +695,19 @@ impl Projector {
         }
     }
 
+    /// The part of the residuals that the columns `c` would fit beyond the model, in the
+    /// observations' units (zero where the weight is zero).
+    pub fn fitted_along(&self, c: &DMat) -> DVec {
+        let extended = self.extended(c);
+        DVec::from_fn(self.w.len(), |i, _| {
+            if self.w[i] > 0.0 {
+                (self.rw[i] - extended.rw[i]) / self.w[i]
+            } else {
+                0.0
+            }
+        })
+    }
+
     /// The fit ([`Projector::fit`] of `y`) of the same model with the observations `rows`
     /// given zero weight (an outer fold's held-out rows), by downdating the basis: with `M =
     /// I − Q_RᵀQ_R = V Λ Vᵀ` the remaining rows' Gram, `Q V Λ^{-1/2}` on the other rows is

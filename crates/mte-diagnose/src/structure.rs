@@ -40,6 +40,45 @@ impl StructureTest {
     }
 }
 
+/// The design columns of the structure test `t` on all observations (zero outside its
+/// channel), as [`structure_tests`] built them: how a plot draws the dependence it found.
+pub(crate) fn test_columns(obs: &Observations, t: &StructureTest, probes: &[Term]) -> Option<DMat> {
+    let n = obs.len();
+    let cols = if let Some(p) = probes.iter().find(|p| p.label == t.test) {
+        p.columns.clone()
+    } else if t.variable == "setup" {
+        setup_columns(obs)
+    } else {
+        let v = obs.variable(&t.variable)?;
+        match (t.test.as_str(), t.period) {
+            (TREND, _) => legendre_columns(&v.values, 1..=3),
+            (PERIODIC, Some(p)) => sin_cos_columns(&v.values, p),
+            (DIRECTION, _) => DMat::from_column_slice(n, 1, &v.values),
+            _ => return None,
+        }
+    };
+    let channel = obs.channel_names.iter().position(|c| *c == t.channel);
+    Some(DMat::from_fn(n, cols.ncols(), |i, j| {
+        if channel.is_none_or(|ch| obs.channel[i] == ch) {
+            cols[(i, j)]
+        } else {
+            0.0
+        }
+    }))
+}
+
+const TREND: &str = "trend (cubic)";
+const PERIODIC: &str = "periodic";
+const DIRECTION: &str = "direction";
+
+/// One indicator column per set-up but the first.
+fn setup_columns(obs: &Observations) -> DMat {
+    let k = obs.setup_names.len();
+    DMat::from_fn(obs.len(), k.saturating_sub(1), |i, j| {
+        if obs.setup[i] == j + 1 { 1.0 } else { 0.0 }
+    })
+}
+
 /// Runs every structure test on the residuals `r` of the model whose design is `x` and fit
 /// `projector` ([`Projector::fit`]), the library's structure probes `probes`
 /// ([`crate::Role::Probe`]) among them, each on the channels its columns touch. On a long
@@ -129,13 +168,7 @@ pub(crate) fn structure_tests(
     // other: run in parallel, collected in order (the same report for any thread count).
     let tests_of = |ch: usize, variable: Option<&Variable>| -> Vec<(StructureTest, f64)> {
         let Some(v) = variable else {
-            let k = obs.setup_names.len();
-            let cols = DMat::from_fn(
-                n,
-                k - 1,
-                |i, j| if obs.setup[i] == j + 1 { 1.0 } else { 0.0 },
-            );
-            return run("setup", Some(ch), "setup", cols, None, 1.0)
+            return run("setup", Some(ch), "setup", setup_columns(obs), None, 1.0)
                 .into_iter()
                 .collect();
         };
@@ -145,7 +178,7 @@ pub(crate) fn structure_tests(
                 out.extend(run(
                     &v.name,
                     Some(ch),
-                    "trend (cubic)",
+                    TREND,
                     legendre_columns(&v.values, 1..=3),
                     None,
                     1.0,
@@ -177,7 +210,7 @@ pub(crate) fn structure_tests(
                         out.extend(run(
                             &v.name,
                             Some(ch),
-                            "periodic",
+                            PERIODIC,
                             sin_cos_columns(&v.values, p),
                             Some((p, if rotary { "°" } else { "mm" })),
                             periods.len() as f64,
@@ -189,7 +222,7 @@ pub(crate) fn structure_tests(
                 out.extend(run(
                     &v.name,
                     Some(ch),
-                    "direction",
+                    DIRECTION,
                     DMat::from_column_slice(n, 1, &v.values),
                     None,
                     1.0,

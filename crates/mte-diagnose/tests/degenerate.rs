@@ -93,6 +93,17 @@ fn variables_without_spread_are_not_a_panic() {
     // significant discrepancy".
     assert!(!d.no_discrepancy());
     assert!(!d.remaining_structure.is_empty());
+    // Its plot draws the dependence the structure test found: the ±1 µm of the reversal
+    // (the base's offset takes the mean; the runs are balanced).
+    let series = d
+        .residual_series
+        .iter()
+        .find(|s| s.finding.is_none())
+        .expect("a series of the unexplained structure");
+    assert_eq!(series.structure.as_deref(), Some("direction"));
+    for (e, x) in series.effect.iter().zip(&series.x) {
+        assert!((e - 1e-3 * x).abs() < 1e-5, "{e} at direction {x}");
+    }
 }
 
 #[test]

@@ -70,7 +70,8 @@ pub fn run(args: &Args) -> Result<(), CliError> {
 
 /// The evidence of one finding: the residuals of the final model with the finding left out,
 /// against the covariate that exposes it (rotary angles folded to one turn), with the fitted
-/// effect drawn over them; one panel per channel. For unexplained structure, the final residuals.
+/// effect drawn over them; one panel per channel. For unexplained structure, the final residuals
+/// with the dependence the structure test found drawn over them.
 /// In µm (arcsec for angular observations).
 fn residual_svg(d: &Diagnosis, index: usize) -> String {
     let s = &d.residual_series[index];
@@ -120,8 +121,10 @@ fn residual_svg(d: &Diagnosis, index: usize) -> String {
                 if dense { "dots" } else { "crosses" }
             ),
             None => format!(
-                "unexplained structure: final residuals against {}",
-                s.variable
+                "unexplained structure: final residuals against {} (grey), {} beyond the model (red {})",
+                s.variable,
+                s.structure.as_deref().unwrap_or("the dependence"),
+                if dense { "dots" } else { "crosses" }
             ),
         };
         let root = root
@@ -157,13 +160,13 @@ fn residual_svg(d: &Diagnosis, index: usize) -> String {
                     .into_iter()
                     .map(|p| Circle::new(p, if dense { 1 } else { 2 }, residual_style)),
             );
-            if s.finding.is_some() && dense {
+            if dense {
                 let _ = chart.draw_series(
                     points(&effect)
                         .into_iter()
                         .map(|p| Circle::new(p, 1, RGBColor(210, 30, 20).filled())),
                 );
-            } else if s.finding.is_some() {
+            } else {
                 let _ = chart.draw_series(
                     points(&effect)
                         .into_iter()
