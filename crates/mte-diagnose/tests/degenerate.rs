@@ -110,15 +110,20 @@ fn variables_without_spread_are_not_a_panic() {
 fn a_regular_grid_says_which_periods_it_cannot_show() {
     // X on a 10 mm grid (60 positions, 590 mm): a pitch shorter than 25 mm aliases; the report
     // says so, and the scan covers 25–295 mm.
+    // X's reach and the notes of a diagnosis of `obs`.
+    let reach = |obs: &Observations| {
+        let d = diagnose(
+            obs,
+            vec![offset(obs.len())],
+            &[],
+            &DiagnoseParams::default(),
+        )
+        .expect("diagnosis runs");
+        let x = d.periodic_reach.iter().find(|r| r.variable == "X").cloned();
+        (x.expect("X varies"), d.notes)
+    };
     let mut obs = runs(|i| i as f64);
-    let d = diagnose(
-        &obs,
-        vec![offset(obs.len())],
-        &[],
-        &DiagnoseParams::default(),
-    )
-    .expect("diagnosis runs");
-    let x = d.periodic_reach.iter().find(|r| r.variable == "X").unwrap();
+    let (x, notes) = reach(&obs);
     let (lo, hi) = x.periods.expect("X has periods to scan");
     assert!(
         (lo - 25.0).abs() < 0.5 && (hi - 295.0).abs() < 1e-9,
@@ -127,29 +132,20 @@ fn a_regular_grid_says_which_periods_it_cannot_show() {
     assert!(x.alias_step.is_some_and(|a| (a - 10.0).abs() < 0.2));
     assert!(x.limited_by_sampling() && x.covers(30.0) && !x.covers(20.0));
     assert!(
-        d.notes.iter().any(|n| n.contains(
+        notes.iter().any(|n| n.contains(
             "the X positions repeat on a step of about 10 mm: periodic errors along X shorter than 25"
         )),
-        "{:?}",
-        d.notes
+        "{notes:?}"
     );
     // Five positions: no period at all.
     obs.variables[0].values = (0..obs.len()).map(|i| (i % 5) as f64 * 100.0).collect();
-    let d = diagnose(
-        &obs,
-        vec![offset(obs.len())],
-        &[],
-        &DiagnoseParams::default(),
-    )
-    .expect("diagnosis runs");
-    let x = d.periodic_reach.iter().find(|r| r.variable == "X").unwrap();
+    let (x, notes) = reach(&obs);
     assert_eq!((x.positions, x.periods), (5, None));
     assert!(
-        d.notes
+        notes
             .iter()
             .any(|n| n.contains("X takes only 5 distinct positions")),
-        "{:?}",
-        d.notes
+        "{notes:?}"
     );
 }
 
