@@ -122,11 +122,10 @@ fn an_error_of_two_axes_at_once_is_reported_as_unexplained_structure() {
     let o = studies::openworld(Kind::Tracker, Effect::TwoAxis, 5.0, 3, SEED);
     assert_eq!(o.errors, 0);
     assert_eq!(o.confident_wrong, 0, "{:?}", o.names);
-    assert!(
-        o.unexplained >= 2,
-        "unexplained in {} of 3, nothing in {}",
-        o.unexplained,
-        o.nothing
+    assert_eq!(
+        o.unexplained, o.n,
+        "unexplained in {} of {}, nothing in {}",
+        o.unexplained, o.n, o.nothing
     );
 }
 

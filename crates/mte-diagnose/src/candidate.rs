@@ -777,9 +777,14 @@ pub(crate) fn interaction_probes(
                     if (*positioning || *straightness) && linear.iter().any(|v| &v.name == axis))
         })
         .collect();
+    let orders: Vec<(usize, usize)> = (1..TOTAL_DEGREE)
+        .flat_map(|i| (1..=TOTAL_DEGREE - i).map(move |j| (i, j)))
+        .collect();
     let mut out: Vec<Box<dyn Candidate>> = Vec::new();
     for (k, a) in linear.iter().enumerate() {
+        let pa = legendre_columns(&a.values, 1..=TOTAL_DEGREE - 1);
         for b in &linear[k + 1..] {
+            let pb = legendre_columns(&b.values, 1..=TOTAL_DEGREE - 1);
             let mut directions: Vec<&DVec> = Vec::new();
             for slot in &translations {
                 let SlotRole::Component { axis, .. } = &slot.role else {
@@ -795,11 +800,6 @@ pub(crate) fn interaction_probes(
                     continue;
                 }
                 directions.push(&slot.column);
-                let pa = legendre_columns(&a.values, 1..=TOTAL_DEGREE - 1);
-                let pb = legendre_columns(&b.values, 1..=TOTAL_DEGREE - 1);
-                let orders: Vec<(usize, usize)> = (1..TOTAL_DEGREE)
-                    .flat_map(|i| (1..=TOTAL_DEGREE - i).map(move |j| (i, j)))
-                    .collect();
                 let columns = DMat::from_fn(obs.len(), orders.len(), |r, c| {
                     let (i, j) = orders[c];
                     slot.column[r] * pa[(r, i - 1)] * pb[(r, j - 1)]
