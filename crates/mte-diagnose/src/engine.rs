@@ -169,6 +169,71 @@ pub struct NotSeparable {
     pub separated_by: Option<String>,
 }
 
+/// The smallest size at which a library cause the search did not find would have been found:
+/// what these data could show, not an estimate of the cause. The size is the one the search's
+/// own tests (the Bonferroni-adjusted F test at `alpha` and the held-out gain of `min_gain`)
+/// accept with probability [`DETECTION_POWER`], given how much of the cause's effect the
+/// complete model leaves visible and the residual scatter of that model.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct DetectionLimit {
+    /// Candidate name.
+    pub name: String,
+    /// What engineers call it.
+    pub label: String,
+    /// Unit of the size.
+    pub quantity: Quantity,
+    /// How the size is read: the coefficient, or the amplitude of a sine and cosine pair.
+    pub summary: Summary,
+    /// Unit of the variants' period or time constant, where the cause has one.
+    pub at_quantity: Option<Quantity>,
+    /// The limit at each variant the search tested (each period or time constant on its grid;
+    /// one for a cause without), in the order of the grid. At least one is separable.
+    pub variants: Vec<VariantLimit>,
+}
+
+/// The detection limit of one variant of a cause.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct VariantLimit {
+    /// The variant's period (mm, or rad along a rotary axis) or time constant (s).
+    pub at: Option<f64>,
+    /// The size found with probability [`DETECTION_POWER`] (internal units: mm, rad, …);
+    /// `None` where the data cannot separate the variant from the model.
+    pub size: Option<f64>,
+}
+
+impl DetectionLimit {
+    /// The separable variants, with their limits.
+    fn separable(&self) -> impl Iterator<Item = (Option<f64>, f64)> + '_ {
+        self.variants.iter().filter_map(|v| Some((v.at, v.size?)))
+    }
+
+    /// The separable variant these data are most sensitive to: its period or time constant
+    /// and limit.
+    pub fn smallest(&self) -> Option<(Option<f64>, f64)> {
+        self.separable().min_by(|a, b| a.1.total_cmp(&b.1))
+    }
+
+    /// The separable variant these data are least sensitive to.
+    pub fn largest(&self) -> Option<(Option<f64>, f64)> {
+        self.separable().max_by(|a, b| a.1.total_cmp(&b.1))
+    }
+
+    /// The limit at the variant whose period or time constant is nearest `at` (relatively; for
+    /// a cause without one, its only variant); `None` if that variant is not separable.
+    pub fn near(&self, at: f64) -> Option<f64> {
+        self.variants
+            .iter()
+            .min_by(|a, b| {
+                let d = |v: &VariantLimit| v.at.map_or(0.0, |h| (h / at).ln().abs());
+                d(a).total_cmp(&d(b))
+            })
+            .and_then(|v| v.size)
+    }
+}
+
+/// Probability with which a cause at its [`DetectionLimit`] is found.
+pub const DETECTION_POWER: f64 = 0.8;
+
 /// The periods along one axis that the sampling let the diagnosis look for (the periodic
 /// candidates and the structure tests scan the same range).
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -371,6 +436,9 @@ pub struct Diagnosis {
     pub pruned: Vec<String>,
     /// Candidates the data cannot separate from the model.
     pub not_separable: Vec<NotSeparable>,
+    /// For each library cause not found (and separable): the size from which these data would
+    /// have shown it. Empty when the search stopped at a limit.
+    pub detection_limits: Vec<DetectionLimit>,
     /// Extended model quality.
     pub extended: FitQuality,
     /// All parameters of the extended model.
@@ -631,12 +699,6 @@ fn conclude(
         pruned.extend(searcher.remove(&mut chosen, k));
     };
     let finals = searcher.removal_p_values(&chosen, &base_fit, &fit);
-    let rotary = |t: &Term| {
-        t.exposed_by
-            .as_deref()
-            .and_then(|v| obs.variable(v))
-            .is_some_and(|v| v.kind == crate::VariableKind::RotaryAxis)
-    };
     let mut findings: Vec<Finding> = chosen
         .iter()
         .enumerate()
@@ -646,7 +708,7 @@ fn conclude(
             meaning: c.term.meaning.clone(),
             family: c.term.family.clone(),
             estimates: extended_parameters[base.len() + k].estimates.clone(),
-            hyper_parameter: hyper_of(&c.term.family, rotary(&c.term))
+            hyper_parameter: hyper_of(&c.term.family, exposed_by_rotary(obs, &c.term))
                 .zip(hyper_u[k])
                 .map(|((v, q), u)| Estimate {
                     name: if q == Quantity::Duration {
@@ -879,6 +941,7 @@ fn conclude(
         compound,
         pruned,
         not_separable: search.not_separable,
+        detection_limits: search.detection_limits,
         extended,
         extended_parameters,
         remaining_structure,
@@ -1151,6 +1214,7 @@ struct SearchResult {
     chosen: Vec<Chosen>,
     steps: Vec<Step>,
     not_separable: Vec<NotSeparable>,
+    detection_limits: Vec<DetectionLimit>,
     pruned: Vec<String>,
     hit_limit: bool,
 }
@@ -1164,6 +1228,10 @@ struct Searcher<'a> {
     candidates: &'a [Box<dyn Candidate>],
     params: &'a DiagnoseParams,
 }
+
+/// What a unit size of each variant of a pool entry would show beyond the model: (entry,
+/// [(variant, [`Increment::energy`], `None` where not separable)]).
+type Sensitivity = (usize, Vec<(usize, Option<f64>)>);
 
 /// A candidate's best variant in one step: (pool entry, variant, adjusted p, share of residual).
 type Scored = (usize, usize, f64, f64);
@@ -1280,6 +1348,7 @@ impl Searcher<'_> {
         let mut chosen: Vec<Chosen> = Vec::new();
         let mut steps = Vec::new();
         let mut not_separable = Vec::new();
+        let mut detection_limits = Vec::new();
         let mut hit_limit = false;
         // Completions that became significant once causes were in: part of the base from then.
         let mut late: Vec<Term> = Vec::new();
@@ -1357,6 +1426,10 @@ impl Searcher<'_> {
             // Each candidate's best variant on the grid, and the grid's other peaks that may
             // beat it once refined.
             let mut graded: Vec<(usize, usize, Increment, Vec<usize>)> = Vec::new();
+            // What a unit size of each variant of a cause not in the model would show
+            // ([`Increment::energy`]): the step that ends the search turns it into the
+            // detection limits.
+            let mut sensitivity: Vec<Sensitivity> = Vec::new();
             for &ci in &eligible {
                 let mut best: Option<(usize, Increment)> = None;
                 let mut profile: Vec<(usize, f64)> = Vec::new();
@@ -1372,11 +1445,14 @@ impl Searcher<'_> {
                             || !near_a_component(obs, t, &chosen, self.pool.source[ci], None)
                     })
                     .collect();
+                let mut energies = Vec::new();
                 for &(vi, t) in &tried {
                     let inc = increment(ci, vi, t);
                     if inc.separability < SEPARABILITY_TOLERANCE || inc.new_rank < t.width() {
+                        energies.push((vi, None));
                         continue;
                     }
+                    energies.push((vi, Some(inc.energy)));
                     profile.push((vi, inc.delta_rss));
                     if best
                         .as_ref()
@@ -1384,6 +1460,9 @@ impl Searcher<'_> {
                     {
                         best = Some((vi, inc));
                     }
+                }
+                if explain && times_chosen[ci] == 0 && energies.iter().any(|e| e.1.is_some()) {
+                    sensitivity.push((ci, energies));
                 }
                 let Some((vi, inc)) = best else {
                     if explain && steps.is_empty() {
@@ -1502,6 +1581,15 @@ impl Searcher<'_> {
             }
             let accepted = best.filter(|(_, _, r)| *r < cv_rms * (1.0 - params.min_gain));
             let Some((ci, vi, new_cv)) = accepted else {
+                if explain {
+                    detection_limits = self.detection_limits(
+                        &sensitivity,
+                        |ci, vi| variant(&overrides, ci, vi),
+                        rss,
+                        dof,
+                        variants_tested,
+                    );
+                }
                 steps.push(Step {
                     ranking,
                     added: None,
@@ -1606,9 +1694,69 @@ impl Searcher<'_> {
             chosen,
             steps,
             not_separable,
+            detection_limits,
             pruned,
             hit_limit,
         }
+    }
+
+    /// The detection limits of the causes in `sensitivity` (each with the energy a unit size of
+    /// each variant tested leaves beyond the model, [`Increment::energy`]; `term(entry,
+    /// variant)` its term) against the model whose weighted residual sum of squares is `rss` on
+    /// `dof` degrees of freedom, in a step that tested `variants_tested` variants (`None`: a
+    /// variant the data cannot separate from the model). Set-up terms get none. The search
+    /// adds a cause when its F test passes at `alpha` after the Bonferroni adjustment and it
+    /// lowers the held-out RMS by `min_gain`: with the noise variance σ² estimated by the
+    /// model's, a cause of noncentrality λ passes both when ΔRSS/σ² ~ χ²(k, λ) exceeds
+    /// k·F(level; k, dof − k) and (1 − (1 − min_gain)²)·dof. The limit is the size whose λ
+    /// makes that happen with probability [`DETECTION_POWER`]. Causes summarised by more than
+    /// one number have no single size and get none.
+    fn detection_limits(
+        &self,
+        sensitivity: &[Sensitivity],
+        term: impl Fn(usize, usize) -> Term,
+        rss: f64,
+        dof: usize,
+        variants_tested: usize,
+    ) -> Vec<DetectionLimit> {
+        let params = self.params;
+        let sigma2 = rss / dof as f64;
+        let gain = (1.0 - (1.0 - params.min_gain).powi(2)) * dof as f64;
+        let mut lambda_of: BTreeMap<usize, f64> = BTreeMap::new();
+        sensitivity
+            .iter()
+            .filter_map(|(ci, energies)| {
+                let t0 = &self.pool.variants[*ci][0];
+                let k = t0.width();
+                if dof <= k + 1
+                    || (k > 1 && t0.summary != Summary::Amplitude)
+                    || t0.family == Family::Setup
+                {
+                    return None;
+                }
+                let lambda = *lambda_of.entry(k).or_insert_with(|| {
+                    let level = (params.alpha / variants_tested.max(1) as f64).min(1.0);
+                    let f = stats::f_isf(level, k as f64, (dof - k) as f64);
+                    noncentrality_for_power((k as f64 * f).max(gain), k as f64, DETECTION_POWER)
+                });
+                let rotary = exposed_by_rotary(self.obs, t0);
+                let variants = energies
+                    .iter()
+                    .map(|&(vi, e)| VariantLimit {
+                        at: hyper_of(&term(*ci, vi).family, rotary).map(|h| h.0),
+                        size: e.map(|e| (lambda * sigma2 / e).sqrt()),
+                    })
+                    .collect();
+                Some(DetectionLimit {
+                    name: t0.name.clone(),
+                    label: t0.label.clone(),
+                    quantity: t0.coefficients[0].1,
+                    summary: t0.summary.clone(),
+                    at_quantity: hyper_of(&t0.family, rotary).map(|h| h.1),
+                    variants,
+                })
+            })
+            .collect()
     }
 
     /// Refines the hyper-parameter of every chosen term with all other terms fitted; keeps a
@@ -1826,6 +1974,26 @@ fn f_test(rss: f64, delta_rss: f64, k: usize, dof: usize) -> f64 {
     let rss_new = (rss - delta_rss).max(1e-300);
     let f = (delta_rss.max(0.0) / k as f64) / (rss_new / (dof - k) as f64);
     stats::f_sf(f, k as f64, (dof - k) as f64)
+}
+
+/// The noncentrality λ with which a χ² statistic of `dof` degrees of freedom exceeds `critical`
+/// with probability `power` (bisection on the noncentral χ² tail, which grows with λ).
+fn noncentrality_for_power(critical: f64, dof: f64, power: f64) -> f64 {
+    let passes = |lambda: f64| stats::noncentral_chi2_sf(critical, dof, lambda);
+    let (mut lo, mut hi) = (0.0, critical.max(1.0));
+    while passes(hi) < power && hi < 1e12 {
+        lo = hi;
+        hi *= 2.0;
+    }
+    while hi - lo > 1e-6 * hi {
+        let mid = 0.5 * (lo + hi);
+        if passes(mid) < power {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    0.5 * (lo + hi)
 }
 
 /// Highest harmonic order [`harmonic_families`] considers: a higher one is as likely a chance
@@ -2180,6 +2348,14 @@ fn drift_shapes(
             })
         })
         .collect()
+}
+
+/// Whether the variable that exposes `t` is a rotary axis (its periods are angles).
+fn exposed_by_rotary(obs: &Observations, t: &Term) -> bool {
+    t.exposed_by
+        .as_deref()
+        .and_then(|v| obs.variable(v))
+        .is_some_and(|v| v.kind == crate::VariableKind::RotaryAxis)
 }
 
 /// The period or time constant of a term, with the quantity it is reported in (a period along a

@@ -601,6 +601,10 @@ pub(crate) struct Increment {
     /// Smallest fraction of a (normalised) candidate direction left after projecting out the
     /// current model: near 0 means the candidate is a combination of existing terms.
     pub separability: f64,
+    /// Whitened sum of squares a unit coefficient adds beyond the model, averaged over the
+    /// directions of the coefficients (`tr(C⊥ᵀ W² C⊥) / k`): what a cause of a given size
+    /// would show in these data.
+    pub energy: f64,
 }
 
 /// `aᵀ b`, the inner loop of every scan, by faer's blocked, vectorised product.
@@ -958,6 +962,7 @@ impl Projector {
             delta_rss: 0.0,
             new_rank: 0,
             separability: 0.0,
+            energy: 0.0,
         };
         if k == 0 {
             return none;
@@ -970,6 +975,7 @@ impl Projector {
             g -= a.tr_mul(&a);
             b -= a.tr_mul(&self.qtr);
         }
+        let energy = g.trace().max(0.0) / k as f64;
         for i in 0..k {
             b[i] /= norms[i];
             for j in 0..k {
@@ -1018,6 +1024,7 @@ impl Projector {
                 .fold(0.0, |d, (l, v)| d + v.dot(&b).powi(2) / l),
             new_rank: directions.len(),
             separability: lambda_min.max(0.0).sqrt(),
+            energy,
         }
     }
 }

@@ -18,7 +18,8 @@ pub use candidate::{
 };
 pub use data::{Observations, Variable, VariableKind};
 pub use engine::{
-    Compound, DiagnoseParams, Diagnosis, Finding, FitQuality, HeldOut, Verdict, diagnose,
+    Compound, DETECTION_POWER, DetectionLimit, DiagnoseParams, Diagnosis, Finding, FitQuality,
+    HeldOut, VariantLimit, Verdict, diagnose,
 };
 pub use instruments::{load, load_with_noise};
 pub use model::{DriftOf, Effects, ObservationModel, Prepared, prepare};

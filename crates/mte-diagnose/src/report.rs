@@ -249,6 +249,7 @@ pub fn markdown(d: &Diagnosis, title: &str) -> String {
         ": left out of the fit",
     );
     not_separable_section(&mut s, "Not separable with this data", &d.not_separable, "");
+    detection_limits_section(&mut s, &d.detection_limits);
     let _ = writeln!(s, "\n## Search\n");
     for (k, step) in d.steps.iter().enumerate() {
         let ranked: Vec<String> = step
@@ -309,6 +310,82 @@ fn not_separable_section(
                 .unwrap_or_default()
         );
     }
+}
+
+/// A table of the sizes from which the causes not found would have been found.
+fn detection_limits_section(s: &mut String, limits: &[crate::engine::DetectionLimit]) {
+    if limits.is_empty() {
+        return;
+    }
+    let _ = writeln!(
+        s,
+        "\n## What these data could have shown\n\nThe causes of the library that were not found, with the size from which the search would find each {:.0} times in 100 (its tests, the model's residual scatter and what the model leaves of the cause's effect decide it; where the cause has a period or time constant, the range over those tested). A cause smaller than that may be present.\n\n| cause | what | would be found from |\n|---|---|---|",
+        100.0 * crate::engine::DETECTION_POWER
+    );
+    let mut rows: Vec<_> = limits.iter().collect();
+    rows.sort_by(|a, b| a.name.cmp(&b.name));
+    for l in rows {
+        let (Some(small), Some(large)) = (l.smallest(), l.largest()) else {
+            continue;
+        };
+        // The period or time constant in its unit.
+        let value = |h: f64| {
+            l.at_quantity.map_or(String::new(), |q| {
+                let (g, u) = q.report_unit();
+                format!("{} {u}", significant(h * g))
+            })
+        };
+        let what = if l.at_quantity == Some(Quantity::Duration) {
+            "τ"
+        } else {
+            "period"
+        };
+        let size = |(h, v): (Option<f64>, f64)| {
+            let (f, unit) = l.quantity.report_unit();
+            let at = h.map_or(String::new(), |h| format!(" ({what} {})", value(h)));
+            if v * f >= BEYOND_REACH {
+                format!("beyond reach (≥ {BEYOND_REACH} {unit}){at}")
+            } else {
+                format!("{} {unit}{at}", significant(v * f))
+            }
+        };
+        let mut text = if small == large {
+            size(small)
+        } else {
+            format!("{} to {}", size(small), size(large))
+        };
+        let hidden: Vec<f64> = l
+            .variants
+            .iter()
+            .filter(|v| v.size.is_none())
+            .filter_map(|v| v.at)
+            .collect();
+        if !hidden.is_empty() {
+            let lo = hidden.iter().copied().fold(f64::INFINITY, f64::min);
+            let hi = hidden.iter().copied().fold(0.0, f64::max);
+            let span = if lo < hi {
+                format!("{} to {}", value(lo), value(hi))
+            } else {
+                value(lo)
+            };
+            text.push_str(&format!(
+                "; not separable from the model at {} of the {} {what}s tested ({span})",
+                hidden.len(),
+                l.variants.len()
+            ));
+        }
+        let _ = writeln!(s, "| {} | {} | {text} |", l.name, l.label);
+    }
+}
+
+/// A limit at or above this many of its reported unit (1 mm in µm, 1 mrad in µrad, 0.1 % in
+/// ppm …) is no size an ordinary error of a machine tool has: the data cannot see the cause.
+const BEYOND_REACH: f64 = 1000.0;
+
+/// Three significant digits.
+fn significant(v: f64) -> String {
+    let digits = (2 - v.abs().max(1e-300).log10().floor() as i32).clamp(0, 6) as usize;
+    format!("{v:.digits$}")
 }
 
 /// Where the unexplained structure is, in words.

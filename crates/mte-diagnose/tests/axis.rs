@@ -458,3 +458,81 @@ fn an_ambiguous_period_is_said_to_be_ambiguous_and_its_amplitude_covers_the_trut
         "eleven targets over 600 mm leave a 23 mm period ambiguous"
     );
 }
+
+/// The detection limits are what the search does: a cause of the size the report gives as
+/// its limit is found in about [`mte_diagnose::DETECTION_POWER`] of the datasets (80 %), one of
+/// half that size in few, one of twice that size in all. Checked for a reversal (one size) and
+/// for a pitch error at one period of the scan.
+#[test]
+fn a_cause_at_its_stated_detection_limit_is_found_four_times_in_five() {
+    const N: usize = 30;
+    let clean = run(&write_dataset("limit-clean", Hidden::default(), 1));
+    let limit = |name: &str, period: Option<f64>| -> f64 {
+        let l = clean
+            .detection_limits
+            .iter()
+            .find(|l| l.name == name)
+            .unwrap_or_else(|| panic!("no detection limit for {name}"));
+        match period {
+            Some(p) => l.near(p),
+            None => l.smallest().map(|s| s.1),
+        }
+        .expect("separable")
+            * 1e3
+    };
+    let reversal = limit("EXX reversal", None);
+    let pitch_period = 23.0;
+    let pitch = limit("EXX periodic", Some(pitch_period));
+    // Of the order of the noise (0.3 µm) over 1010 readings.
+    assert!(
+        reversal > 0.02 && reversal < 0.3,
+        "reversal limit {reversal} µm"
+    );
+    assert!(pitch > 0.02 && pitch < 0.5, "pitch limit {pitch} µm");
+    let found_share = |scale: f64, hidden: &dyn Fn(f64) -> Hidden, name: &str| {
+        let found = (0..N)
+            .filter(|&i| {
+                let d = run(&write_dataset(
+                    &format!("limit-{name}-{scale}-{i}"),
+                    hidden(scale),
+                    100 + i as u64,
+                ));
+                d.findings.iter().any(|f| f.name == name)
+            })
+            .count();
+        found as f64 / N as f64
+    };
+    let with_reversal = |s: f64| Hidden {
+        reversal_um: s * reversal,
+        ..Default::default()
+    };
+    let with_pitch = |s: f64| Hidden {
+        pitch_amplitude_um: s * pitch,
+        pitch_period_mm: pitch_period,
+        ..Default::default()
+    };
+    for (hidden, name) in [
+        (&with_reversal as &dyn Fn(f64) -> Hidden, "EXX reversal"),
+        (&with_pitch, "EXX periodic"),
+    ] {
+        let at = found_share(1.0, hidden, name);
+        // 80 % of 30: a binomial standard deviation of 7 %.
+        assert!(
+            (0.6..=0.97).contains(&at),
+            "{name} at its limit found in {:.0} %",
+            100.0 * at
+        );
+        let half = found_share(0.5, hidden, name);
+        assert!(
+            half <= 0.4,
+            "{name} at half its limit found in {:.0} %",
+            100.0 * half
+        );
+        let twice = found_share(2.0, hidden, name);
+        assert!(
+            twice >= 0.97,
+            "{name} at twice its limit found in {:.0} %",
+            100.0 * twice
+        );
+    }
+}
