@@ -481,7 +481,8 @@ pub fn openworld_plan() -> Vec<(Kind, Effect, f64)> {
 /// `EA0Z` ≡ `EA0Y`, `EB0Z` ≡ `EB0X`); reversal → contains `reversal`; instrument scale →
 /// `tracker scale`; drift → contains `drift` (and the parameter's name where there is one, e.g.
 /// `EX0B … drift`), not a scale drift; angular positioning → contains `ECC`/`EBB` or the axis'
-/// name with `periodic`/`harmonic`; location → starts with the ISO name (`EA0B`, `EA0B abs`);
+/// name with `periodic`/`harmonic`; location → starts with the ISO name (`EA0B`, `EA0B abs`),
+/// not a drift of it;
 /// open-world effects are never named right.
 pub fn names_effect(effect: &TrueEffect, finding: &str) -> bool {
     let hint = effect.iso_name_hint.as_str();
@@ -509,7 +510,7 @@ pub fn names_effect(effect: &TrueEffect, finding: &str) -> bool {
                 || (finding.contains(axis)
                     && (finding.contains("periodic") || finding.contains("harmonic")))
         }
-        EffectKind::Location => finding.starts_with(hint),
+        EffectKind::Location => finding.starts_with(hint) && !finding.contains("drift"),
         EffectKind::OpenWorld => false,
     }
 }
@@ -692,11 +693,15 @@ pub fn stated_out_of_reach(effect: &TrueEffect, o: &Outcome) -> bool {
     })
 }
 
-/// Whether the report says the effect is too small for these data: the causes of the library
-/// that would name it have detection limits ([`mte_diagnose::DetectionLimit`]), and at the
-/// effect's period (where it has one; else at the variant the data are most sensitive to) each
-/// is above the effect's size or not separable from the model.
+/// Whether the report says the effect is too small for these data: a cause of the library that
+/// would name it is listed as not separable from the model, or those that would name it have
+/// detection limits ([`mte_diagnose::DetectionLimit`]) and at the effect's period (where it has
+/// one; else at the variant the data are most sensitive to) each is above the effect's size or
+/// not separable from the model.
 pub fn stated_below_limit(effect: &TrueEffect, o: &Outcome) -> bool {
+    if o.not_separable.iter().any(|n| names_effect(effect, n)) {
+        return true;
+    }
     let mut limits = o
         .detection_limits
         .iter()
@@ -983,7 +988,8 @@ positions cannot show a 5–40 mm pitch, one on scattered targets can); *else st
 detection limit*: none of these, and the report's table of what the data could have shown \
 (`Diagnosis::detection_limits`: for each cause not found, the size the search would find 80 \
 times in 100) gives, for every cause that would name the effect, at the effect's period, a size \
-above the effect's or says that period is not separable from the model \
+above the effect's or says that period is not separable from the model, or the report lists \
+such a cause as not separable \
 (`xtask::studies::stated_below_limit`) — a miss the report owns up to; *within 2 u*: \
 of those named right, |estimate − truth| ≤ 2 u (the `amplitude` estimate or the first; \
 magnitudes for periodic amplitudes and squareness, whose sign convention is the engine's; \

@@ -319,7 +319,7 @@ fn detection_limits_section(s: &mut String, limits: &[crate::engine::DetectionLi
     }
     let _ = writeln!(
         s,
-        "\n## What these data could have shown\n\nThe causes of the library that were not found, with the size from which the search would find each {:.0} times in 100 (its tests, the model's residual scatter and what the model leaves of the cause's effect decide it; where the cause has a period or time constant, the range over those tested). A cause smaller than that may be present.\n\n| cause | what | would be found from |\n|---|---|---|",
+        "\n## What these data could have shown\n\nThe causes of the library that were not found, with the size from which the search would find each {:.0} times in 100 (its tests, the model's residual scatter and what the model leaves of the cause's effect decide it; where the cause has a period or time constant, the range over those tested). A cause smaller than that may be present. The limits hold for the model as completed: where higher orders of the base entered because a cause was there, they hold part of it, and its limit is then too low.\n\n| cause | what | would be found from |\n|---|---|---|",
         100.0 * crate::engine::DETECTION_POWER
     );
     let mut rows: Vec<_> = limits.iter().collect();
