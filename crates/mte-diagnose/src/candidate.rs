@@ -1070,7 +1070,7 @@ fn drift_candidates(constant: &Term, t: &[f64], floor: f64) -> Vec<Box<dyn Candi
     let times = t.to_vec();
     let make = move |tau: f64, rows: Option<&[usize]>| Term {
         name: format!("{name} drift exp"),
-        label: format!("thermal drift of {name} (first-order, τ = {tau:.0} s)"),
+        label: format!("thermal drift of {name} (first-order)"),
         meaning: format!("{label} settles towards a new value with a thermal time constant"),
         family: Family::Drift {
             time_constant_s: Some(tau),

@@ -189,6 +189,9 @@ pub struct DetectionLimit {
     /// The limit at each variant the search tested (each period or time constant on its grid;
     /// one for a cause without), in the order of the grid. At least one is separable.
     pub variants: Vec<VariantLimit>,
+    /// The model terms that the variants not separable are combinations of (what holds the
+    /// cause there), largest first.
+    pub held_by: Vec<String>,
 }
 
 /// The detection limit of one variant of a cause.
@@ -233,6 +236,9 @@ impl DetectionLimit {
 
 /// Probability with which a cause at its [`DetectionLimit`] is found.
 pub const DETECTION_POWER: f64 = 0.8;
+
+/// Variants not separable whose make-up [`DetectionLimit::held_by`] reads, at most.
+const HELD_BY_SAMPLES: usize = 4;
 
 /// The periods along one axis that the sampling let the diagnosis look for (the periodic
 /// candidates and the structure tests scan the same range).
@@ -1582,11 +1588,12 @@ impl Searcher<'_> {
             let accepted = best.filter(|(_, _, r)| *r < cv_rms * (1.0 - params.min_gain));
             let Some((ci, vi, new_cv)) = accepted else {
                 if explain {
+                    let held_by = |t: &Term| confounded_with(t, &terms, &x, &projector);
                     detection_limits = self.detection_limits(
                         &sensitivity,
                         |ci, vi| variant(&overrides, ci, vi),
-                        rss,
-                        dof,
+                        held_by,
+                        (rss, dof),
                         variants_tested,
                     );
                 }
@@ -1702,9 +1709,10 @@ impl Searcher<'_> {
 
     /// The detection limits of the causes in `sensitivity` (each with the energy a unit size of
     /// each variant tested leaves beyond the model, [`Increment::energy`]; `term(entry,
-    /// variant)` its term) against the model whose weighted residual sum of squares is `rss` on
-    /// `dof` degrees of freedom, in a step that tested `variants_tested` variants (`None`: a
-    /// variant the data cannot separate from the model). Set-up terms get none. The search
+    /// variant)` its term; `held_by(term)` the model terms a variant not separable is made of)
+    /// against the model whose weighted residual sum of squares is `rss` on `dof` degrees of
+    /// freedom, in a step that tested `variants_tested` variants (`None`: a variant the data
+    /// cannot separate from the model). Set-up terms get none. The search
     /// adds a cause when its F test passes at `alpha` after the Bonferroni adjustment and it
     /// lowers the held-out RMS by `min_gain`: with the noise variance σ² estimated by the
     /// model's, a cause of noncentrality λ passes both when ΔRSS/σ² ~ χ²(k, λ) exceeds
@@ -1715,8 +1723,8 @@ impl Searcher<'_> {
         &self,
         sensitivity: &[Sensitivity],
         term: impl Fn(usize, usize) -> Term,
-        rss: f64,
-        dof: usize,
+        held_by: impl Fn(&Term) -> Vec<String>,
+        (rss, dof): (f64, usize),
         variants_tested: usize,
     ) -> Vec<DetectionLimit> {
         let params = self.params;
@@ -1747,6 +1755,23 @@ impl Searcher<'_> {
                         size: e.map(|e| (lambda * sigma2 / e).sqrt()),
                     })
                     .collect();
+                // What holds the variants not separable: a few of them, evenly spread.
+                let hidden: Vec<usize> = energies
+                    .iter()
+                    .filter(|e| e.1.is_none())
+                    .map(|e| e.0)
+                    .collect();
+                let mut held: Vec<String> = Vec::new();
+                for &vi in hidden
+                    .iter()
+                    .step_by(hidden.len().div_ceil(HELD_BY_SAMPLES).max(1))
+                {
+                    for name in held_by(&term(*ci, vi)) {
+                        if !held.contains(&name) {
+                            held.push(name);
+                        }
+                    }
+                }
                 Some(DetectionLimit {
                     name: t0.name.clone(),
                     label: t0.label.clone(),
@@ -1754,6 +1779,7 @@ impl Searcher<'_> {
                     summary: t0.summary.clone(),
                     at_quantity: hyper_of(&t0.family, rotary).map(|h| h.1),
                     variants,
+                    held_by: held,
                 })
             })
             .collect()
@@ -3011,7 +3037,17 @@ fn record_not_separable(
     if x.ncols() == 0 {
         return;
     }
-    // Which model terms the candidate is made of: regress it on the model's columns.
+    out.push(NotSeparable {
+        name: t.name.clone(),
+        label: t.label.clone(),
+        confounded_with: confounded_with(t, model, x, fit),
+        separated_by: t.separated_by.clone(),
+    });
+}
+
+/// The terms of the model (design `x`, fit `fit`) that `t`'s first column is made of: regressed
+/// on the model's columns, those carrying more than 5 % of the combination, largest first.
+fn confounded_with(t: &Term, model: &[Term], x: &DMat, fit: &Projector) -> Vec<String> {
     let coef = fit.coefficients(&t.columns.column(0).into_owned());
     let mut contributions: Vec<(String, f64)> = Vec::new();
     let mut c = 0;
@@ -3026,17 +3062,11 @@ fn record_not_separable(
     }
     let total: f64 = contributions.iter().map(|c| c.1).sum();
     contributions.sort_by(|a, b| b.1.total_cmp(&a.1));
-    let confounded_with = contributions
+    contributions
         .into_iter()
         .filter(|c| c.1 > 0.05 * total)
         .map(|c| c.0)
-        .collect();
-    out.push(NotSeparable {
-        name: t.name.clone(),
-        label: t.label.clone(),
-        confounded_with,
-        separated_by: t.separated_by.clone(),
-    });
+        .collect()
 }
 
 fn hcat(a: &DMat, b: &DMat) -> DMat {

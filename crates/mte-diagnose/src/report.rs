@@ -332,7 +332,8 @@ fn detection_limits_section(s: &mut String, limits: &[crate::engine::DetectionLi
         let value = |h: f64| {
             l.at_quantity.map_or(String::new(), |q| {
                 let (g, u) = q.report_unit();
-                format!("{} {u}", significant(h * g))
+                let gap = if u == "°" { "" } else { " " };
+                format!("{}{gap}{u}", significant(h * g))
             })
         };
         let what = if l.at_quantity == Some(Quantity::Duration) {
@@ -368,8 +369,13 @@ fn detection_limits_section(s: &mut String, limits: &[crate::engine::DetectionLi
             } else {
                 value(lo)
             };
+            let held = if l.held_by.is_empty() {
+                String::new()
+            } else {
+                format!(", where it is a combination of {}", l.held_by.join(", "))
+            };
             text.push_str(&format!(
-                "; not separable from the model at {} of the {} {what}s tested ({span})",
+                "; not separable from the model at {} of the {} {what}s tested ({span}{held})",
                 hidden.len(),
                 l.variants.len()
             ));
