@@ -193,3 +193,25 @@ fn harmonics_found_for_a_sawtooth_are_named_one_non_sinusoidal_error() {
         "a sine pitch found at its period called non-sinusoidal: {sine:?}"
     );
 }
+
+/// Against the full user model, an R-test cannot tell C's angular positioning at the low
+/// harmonics, nor a B tilt, from the error motions and component errors the model has (with one
+/// ball, a translation of the C line at each angle reproduces r·ε(c) exactly). A miss must then
+/// be one the report owns up to: the cause listed as not separable, or its detection limit above
+/// the effect's size (or not separable) at the effect's period.
+#[test]
+fn a_missed_rtest_effect_is_one_the_report_says_it_could_not_show() {
+    for (effect, size, n) in [
+        (Effect::AngularPositioning, 5.0, 3),
+        (Effect::BTilt, 25.0, 2),
+    ] {
+        let c = &studies::power(Kind::Rtest, effect, &[size], n, SEED)[0];
+        assert_eq!(c.errors, 0);
+        let owned = c.named_right + c.named_as_alternative + c.out_of_reach + c.below_limit;
+        assert_eq!(
+            owned, c.n,
+            "{effect:?} {size}: named {}, not separable {}, out of reach {}, below the limit {} of {}",
+            c.named_right, c.named_as_alternative, c.out_of_reach, c.below_limit, c.n
+        );
+    }
+}
