@@ -1745,7 +1745,11 @@ impl Searcher<'_> {
                 let lambda = *lambda_of.entry(k).or_insert_with(|| {
                     let level = (params.alpha / variants_tested.max(1) as f64).min(1.0);
                     let f = stats::f_isf(level, k as f64, (dof - k) as f64);
-                    noncentrality_for_power((k as f64 * f).max(gain), k as f64, DETECTION_POWER)
+                    stats::noncentral_chi2_power_noncentrality(
+                        (k as f64 * f).max(gain),
+                        k as f64,
+                        DETECTION_POWER,
+                    )
                 });
                 let rotary = exposed_by_rotary(self.obs, t0);
                 let variants = energies
@@ -2000,26 +2004,6 @@ fn f_test(rss: f64, delta_rss: f64, k: usize, dof: usize) -> f64 {
     let rss_new = (rss - delta_rss).max(1e-300);
     let f = (delta_rss.max(0.0) / k as f64) / (rss_new / (dof - k) as f64);
     stats::f_sf(f, k as f64, (dof - k) as f64)
-}
-
-/// The noncentrality λ with which a χ² statistic of `dof` degrees of freedom exceeds `critical`
-/// with probability `power` (bisection on the noncentral χ² tail, which grows with λ).
-fn noncentrality_for_power(critical: f64, dof: f64, power: f64) -> f64 {
-    let passes = |lambda: f64| stats::noncentral_chi2_sf(critical, dof, lambda);
-    let (mut lo, mut hi) = (0.0, critical.max(1.0));
-    while passes(hi) < power && hi < 1e12 {
-        lo = hi;
-        hi *= 2.0;
-    }
-    while hi - lo > 1e-6 * hi {
-        let mid = 0.5 * (lo + hi);
-        if passes(mid) < power {
-            lo = mid;
-        } else {
-            hi = mid;
-        }
-    }
-    0.5 * (lo + hi)
 }
 
 /// Highest harmonic order [`harmonic_families`] considers: a higher one is as likely a chance

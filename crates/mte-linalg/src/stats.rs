@@ -354,22 +354,7 @@ pub fn f_isf(q: f64, d1: f64, d2: f64) -> f64 {
     if !(q > 0.0 && q <= 1.0) {
         return f64::NAN;
     }
-    let (mut lo, mut hi) = (0.0, 1.0);
-    while f_sf(hi, d1, d2) > q && hi < 1e300 {
-        hi *= 2.0;
-    }
-    for _ in 0..200 {
-        let mid = 0.5 * (lo + hi);
-        if f_sf(mid, d1, d2) > q {
-            lo = mid;
-        } else {
-            hi = mid;
-        }
-        if hi - lo <= 1e-15 * hi {
-            break;
-        }
-    }
-    0.5 * (lo + hi)
+    bisect_increasing(|x| -f_sf(x, d1, d2), -q, 0.0, 1.0)
 }
 
 /// Upper tail of the noncentral χ² distribution with `dof` degrees of freedom and
@@ -393,17 +378,37 @@ pub fn noncentral_chi2_sf(x: f64, dof: f64, lambda: f64) -> f64 {
     sum.clamp(0.0, 1.0)
 }
 
+/// The noncentrality λ with which a χ² statistic of `dof` degrees of freedom exceeds `critical`
+/// with probability `power`: the effect a test at that critical value detects with that power.
+pub fn noncentral_chi2_power_noncentrality(critical: f64, dof: f64, power: f64) -> f64 {
+    if !(0.0..1.0).contains(&power) {
+        return f64::NAN;
+    }
+    bisect_increasing(
+        |lambda| noncentral_chi2_sf(critical, dof, lambda),
+        power,
+        0.0,
+        critical.max(1.0),
+    )
+}
+
 /// Solves `cdf(x) = p` on [lo, hi] by bisection (monotone CDF; 200 halvings reach f64 resolution).
-fn invert_cdf(cdf: impl Fn(f64) -> f64, p: f64, mut lo: f64, mut hi: f64) -> f64 {
+fn invert_cdf(cdf: impl Fn(f64) -> f64, p: f64, lo: f64, hi: f64) -> f64 {
     if !(0.0..=1.0).contains(&p) || p.is_nan() {
         return f64::NAN;
     }
-    while cdf(hi) < p && hi.is_finite() {
+    bisect_increasing(cdf, p, lo, hi)
+}
+
+/// Solves `f(x) = target` for a non-decreasing `f` by bisection, starting from [lo, hi] and
+/// doubling `hi` until `f(hi)` reaches the target (200 halvings reach f64 resolution).
+fn bisect_increasing(f: impl Fn(f64) -> f64, target: f64, mut lo: f64, mut hi: f64) -> f64 {
+    while f(hi) < target && hi.is_finite() {
         hi *= 2.0;
     }
     for _ in 0..200 {
         let mid = 0.5 * (lo + hi);
-        if cdf(mid) < p {
+        if f(mid) < target {
             lo = mid;
         } else {
             hi = mid;
@@ -422,7 +427,7 @@ mod tests {
 
     // Reference values from scipy.stats (norm, chi2, t, f), run by hand, quoted to the digits shown.
     #[test]
-    fn noncentral_chi2_and_f_upper_quantile_reference_values() {
+    fn noncentral_chi2_power_and_f_upper_quantile_reference_values() {
         // scipy.stats.ncx2.sf(x, dof, λ) and scipy.stats.f.isf(q, d1, d2).
         assert_relative_eq!(
             noncentral_chi2_sf(30.0, 2.0, 25.0),
@@ -451,6 +456,17 @@ mod tests {
             max_relative = 1e-9
         );
         assert!(f_isf(0.0, 1.0, 20.0).is_nan());
+        // scipy.optimize.brentq on scipy.stats.ncx2.sf(critical, dof, λ) − power.
+        assert_relative_eq!(
+            noncentral_chi2_power_noncentrality(47.5, 2.0, 0.8),
+            58.74704358098452,
+            max_relative = 1e-9
+        );
+        assert_relative_eq!(
+            noncentral_chi2_power_noncentrality(10.83, 1.0, 0.8),
+            17.077703102452016,
+            max_relative = 1e-9
+        );
     }
 
     #[test]
