@@ -993,7 +993,9 @@ such a cause as not separable \
 (`xtask::studies::stated_below_limit`) — a miss the report owns up to; *within 2 u*: \
 of those named right, |estimate − truth| ≤ 2 u (the `amplitude` estimate or the first; \
 magnitudes for periodic amplitudes and squareness, whose sign convention is the engine's; \
-for B tilt and squareness the truth is the machine's total, ordinary + hidden); *named alone, \
+for B tilt and squareness the truth is the machine's total, ordinary + hidden, for C's angular \
+positioning the amplitude of the machine's total at the hidden harmonic, where its ordinary \
+error motion about Z has a component too); *named alone, \
 explained*: of all datasets, those where the effect is named right, no finding names anything \
 else, and the verdict is that the causes found explain the data (residuals consistent with the \
 noise, no structure left) — what a user should see. Pitch periods \

@@ -14,7 +14,7 @@ use crate::candidate::{Candidate, Role};
 use crate::data::Observations;
 use crate::fit::{
     Directions, Folds, Increment, Projector, SEPARABILITY_TOLERANCE, Solution, block_grams, design,
-    max_abs, rms, separable_columns, solve, weighted_products, whitened_r, whitening,
+    max_abs, rms, separable_columns, solve, tr_mul, weighted_products, whitened_r, whitening,
 };
 use crate::structure::{StructureTest, structure_tests};
 use crate::term::{Estimate, Family, Quantity, Summary, Term};
@@ -679,6 +679,13 @@ fn conclude(
         gauss_newton_hyper(&searcher, &mut chosen, w);
     }
     let mut pruned = search.pruned;
+    // The next order of every base error, for the uncertainty of the base's orders.
+    let next_orders = next_orders(candidates, obs, &base);
+    let x_next = design(&next_orders.iter().collect::<Vec<_>>(), n);
+    let base_and_next = std::cell::OnceCell::new();
+    let base_and_next = || base_and_next.get_or_init(|| base_fit.extended(&x_next));
+    let mut not_separable = search.not_separable;
+    let mut rests_on_orders: Vec<String> = Vec::new();
     let (terms, x, sol, fit, extended, hyper_u, extended_parameters) = loop {
         let terms = searcher.with(&chosen, None);
         let (x, fit) = searcher.fit_of(&base_fit, &terms);
@@ -686,22 +693,69 @@ fn conclude(
         let cv = fit.fold_fits(&folds, &x, &obs.values).residuals();
         let extended = quality(obs, &sol, &cv);
         let scale = covariance_scale(obs, extended.sigma0);
-        let (cov, hyper_u) = covariance_with_hyper(&searcher, &chosen, &terms, &x, &sol, w, scale);
+        let (mut cov, hyper_u) =
+            covariance_with_hyper(&searcher, &chosen, &terms, &x, &sol, w, scale);
+        // The uncertainty of the base's orders: each cause's cofactor widened by what the next
+        // order of every base error would add.
+        let plain = cov.clone();
+        let causes = &terms[base.len()..];
+        let mut undetermined = None;
+        let mut at = x0.ncols();
+        let widening = if causes.is_empty() {
+            Vec::new()
+        } else {
+            order_widening(&base_fit, base_and_next(), causes)
+        };
+        for (k, widening) in widening.into_iter().enumerate() {
+            let width = causes[k].width();
+            match widening {
+                Some(d) => {
+                    let mut block = cov.view_mut((at, at), (width, width));
+                    block += d * scale;
+                }
+                None => undetermined = undetermined.or(Some(k)),
+            }
+            at += width;
+        }
         let extended_parameters = parameters(&terms, &sol.coef, &cov);
+        let z = |p: &[ParameterEstimate], k: usize| {
+            p[base.len() + k]
+                .estimates
+                .iter()
+                .map(|e| e.value.abs() / e.uncertainty.max(1e-300))
+                .fold(0.0, f64::max)
+        };
         let weakest = (0..chosen.len())
-            .map(|k| {
-                let e = &extended_parameters[base.len() + k].estimates;
-                let z = e
-                    .iter()
-                    .map(|e| e.value.abs() / e.uncertainty.max(1e-300))
-                    .fold(0.0, f64::max);
-                (k, z)
-            })
+            .map(|k| (k, z(&extended_parameters, k)))
             .filter(|(_, z)| *z < 2.0)
             .min_by(|a, b| a.1.total_cmp(&b.1));
-        let Some((k, _)) = weakest else {
+        let Some(k) = undetermined.or(weakest.map(|w| w.0)) else {
             break (terms, x, sol, fit, extended, hyper_u, extended_parameters);
         };
+        // A cause the base's next orders would hold, or whose size they leave undetermined,
+        // rests on the base's orders alone: the report lists it as not separable from them.
+        if undetermined.is_some() || z(&parameters(&terms, &sol.coef, &plain), k) >= 2.0 {
+            let others: Vec<&Term> = causes
+                .iter()
+                .enumerate()
+                .filter_map(|(j, t)| (j != k).then_some(t))
+                .collect();
+            let x_others = design(&others, n);
+            let model: Vec<Term> = base
+                .iter()
+                .chain(&next_orders)
+                .chain(others.iter().copied())
+                .cloned()
+                .collect();
+            record_not_separable(
+                &mut not_separable,
+                &causes[k],
+                &model,
+                &hcat(&hcat(&x0, &x_next), &x_others),
+                &base_and_next().extended(&x_others),
+            );
+            rests_on_orders.push(causes[k].name.clone());
+        }
         pruned.extend(searcher.remove(&mut chosen, k));
     };
     let finals = searcher.removal_p_values(&chosen, &base_fit, &fit);
@@ -840,6 +894,22 @@ fn conclude(
         )
     });
     let mut notes = Vec::new();
+    if !rests_on_orders.is_empty() {
+        const NAMED: usize = 6;
+        let names: Vec<&str> = next_orders.iter().map(|t| t.name.as_str()).collect();
+        notes.push(format!(
+            "{} found by the search but left out: these data tell {} from the base model only through the orders the base stops at. With the next order of every base error in the model ({}{}), {} size is not determined: it rests on the assumption that the base errors have no higher orders, not on the data",
+            rests_on_orders.join(", "),
+            if rests_on_orders.len() == 1 { "it" } else { "them" },
+            names[..names.len().min(NAMED)].join(", "),
+            if names.len() > NAMED {
+                format!(" and {} more", names.len() - NAMED)
+            } else {
+                String::new()
+            },
+            if rests_on_orders.len() == 1 { "its" } else { "their" },
+        ));
+    }
     for v in &obs.variables {
         if !crate::candidate::varies(&v.values) {
             notes.push(match v.kind {
@@ -946,7 +1016,7 @@ fn conclude(
         findings,
         compound,
         pruned,
-        not_separable: search.not_separable,
+        not_separable,
         detection_limits: search.detection_limits,
         extended,
         extended_parameters,
@@ -1236,8 +1306,9 @@ struct Searcher<'a> {
 }
 
 /// What a unit size of each variant of a pool entry would show beyond the model: (entry,
-/// [(variant, [`Increment::energy`], `None` where not separable)]).
-type Sensitivity = (usize, Vec<(usize, Option<f64>)>);
+/// [(variant, `E`, `None` where not separable)]), `E` its increment or the extremes of its
+/// energy ([`Increment::beyond`]).
+type Sensitivity<E = (f64, f64)> = (usize, Vec<(usize, Option<E>)>);
 
 /// A candidate's best variant in one step: (pool entry, variant, adjusted p, share of residual).
 type Scored = (usize, usize, f64, f64);
@@ -1433,9 +1504,9 @@ impl Searcher<'_> {
             // beat it once refined.
             let mut graded: Vec<(usize, usize, Increment, Vec<usize>)> = Vec::new();
             // What a unit size of each variant of a cause not in the model would show
-            // ([`Increment::energy`]): the step that ends the search turns it into the
+            // ([`Increment::beyond`]): the step that ends the search turns it into the
             // detection limits.
-            let mut sensitivity: Vec<Sensitivity> = Vec::new();
+            let mut sensitivity: Vec<Sensitivity<Increment>> = Vec::new();
             for &ci in &eligible {
                 let mut best: Option<(usize, Increment)> = None;
                 let mut profile: Vec<(usize, f64)> = Vec::new();
@@ -1458,7 +1529,7 @@ impl Searcher<'_> {
                         energies.push((vi, None));
                         continue;
                     }
-                    energies.push((vi, Some(inc.energy)));
+                    energies.push((vi, Some(inc.clone())));
                     profile.push((vi, inc.delta_rss));
                     if best
                         .as_ref()
@@ -1588,11 +1659,10 @@ impl Searcher<'_> {
             let accepted = best.filter(|(_, _, r)| *r < cv_rms * (1.0 - params.min_gain));
             let Some((ci, vi, new_cv)) = accepted else {
                 if explain {
-                    let held_by = |t: &Term| confounded_with(t, &terms, &x, &projector);
-                    detection_limits = self.detection_limits(
+                    detection_limits = self.limits_beyond_next_orders(
                         &sensitivity,
-                        |ci, vi| variant(&overrides, ci, vi),
-                        held_by,
+                        &overrides,
+                        (&terms, &x, &projector, w),
                         (rss, dof),
                         variants_tested,
                     );
@@ -1707,8 +1777,97 @@ impl Searcher<'_> {
         }
     }
 
+    /// The detection limits at the step that ends the search ([`Searcher::detection_limits`]),
+    /// from each variant's increment over the model (`terms`, its design, fit and weights): a
+    /// cause the base's next orders would hold does not stay in the final model
+    /// ([`order_widening`]), so they are against the model with the next order of every base
+    /// error in it. Each variant's energy beyond those orders too comes from its products with
+    /// the directions they add, in blocks of a few hundred columns, each one product.
+    fn limits_beyond_next_orders(
+        &self,
+        sensitivity: &[Sensitivity<Increment>],
+        overrides: &HashMap<(usize, usize), Term>,
+        (terms, x, projector, w): (&[Term], &DMat, &Projector, &DVec),
+        rss_dof: (f64, usize),
+        variants_tested: usize,
+    ) -> Vec<DetectionLimit> {
+        let obs = self.obs;
+        let term_of = |ci: usize, vi: usize| {
+            overrides
+                .get(&(ci, vi))
+                .unwrap_or(&self.pool.variants[ci][vi])
+        };
+        let next: Vec<Term> = (0..self.pool.variants.len())
+            .filter(|&ci| is_next_order(self.candidate(ci), terms))
+            .filter_map(|ci| self.pool.variants[ci].first().cloned())
+            .filter(|t| !terms.iter().any(|m| m.name == t.name))
+            .collect();
+        let x_next = design(&next.iter().collect::<Vec<_>>(), obs.len());
+        let directions = projector.directions_beyond(&x_next);
+        let flat: Vec<(usize, usize, &Increment)> = sensitivity
+            .iter()
+            .flat_map(|(ci, incs)| {
+                incs.iter()
+                    .filter_map(move |(vi, inc)| inc.as_ref().map(|i| (*ci, *vi, i)))
+            })
+            .collect();
+        const BLOCK: usize = 256;
+        let beyond: HashMap<(usize, usize), (f64, f64)> = flat
+            .par_chunks(BLOCK)
+            .flat_map_iter(|chunk| {
+                let width: usize = chunk.iter().map(|c| term_of(c.0, c.1).width()).sum();
+                // The block's whitened columns, side by side.
+                let wc = DMat::from_iterator(
+                    obs.len(),
+                    width,
+                    chunk.iter().flat_map(|&(ci, vi, _)| {
+                        let c = &term_of(ci, vi).columns;
+                        let (n, data) = (c.nrows(), c.as_slice());
+                        (0..c.ncols()).flat_map(move |j| {
+                            data[j * n..(j + 1) * n]
+                                .iter()
+                                .zip(w.iter())
+                                .map(|(c, w)| c * w)
+                        })
+                    }),
+                );
+                let b = tr_mul(&directions, &wc);
+                let mut at = 0;
+                chunk
+                    .iter()
+                    .filter_map(|&(ci, vi, inc)| {
+                        let k = term_of(ci, vi).width();
+                        at += k;
+                        inc.beyond(&b.columns(at - k, k).into_owned())
+                            .map(|e| ((ci, vi), e))
+                    })
+                    .collect::<Vec<_>>()
+            })
+            .collect();
+        let sensitivity: Vec<Sensitivity> = sensitivity
+            .iter()
+            .map(|(ci, incs)| {
+                let energies = incs
+                    .iter()
+                    .map(|(vi, _)| (*vi, beyond.get(&(*ci, *vi)).copied()))
+                    .collect();
+                (*ci, energies)
+            })
+            .collect();
+        let model: Vec<Term> = terms.iter().chain(&next).cloned().collect();
+        let x_model = hcat(x, &x_next);
+        let fit = projector.extended(&x_next);
+        self.detection_limits(
+            &sensitivity,
+            |ci, vi| term_of(ci, vi).clone(),
+            |c| confounded_with(c, &model, &x_model, &fit),
+            rss_dof,
+            variants_tested,
+        )
+    }
+
     /// The detection limits of the causes in `sensitivity` (each with the energy a unit size of
-    /// each variant tested leaves beyond the model, [`Increment::energy`]; `term(entry,
+    /// each variant tested leaves beyond the model, [`Increment::beyond`]; `term(entry,
     /// variant)` its term; `held_by(term)` the model terms a variant not separable is made of)
     /// against the model whose weighted residual sum of squares is `rss` on `dof` degrees of
     /// freedom, in a step that tested `variants_tested` variants (`None`: a variant the data
@@ -1717,21 +1876,29 @@ impl Searcher<'_> {
     /// lowers the held-out RMS by `min_gain`: with the noise variance σ² estimated by the
     /// model's, a cause of noncentrality λ passes both when ΔRSS/σ² ~ χ²(k, λ) exceeds
     /// k·F(level; k, dof − k) and (1 − (1 − min_gain)²)·dof. The limit is the size whose λ
-    /// makes that happen with probability [`DETECTION_POWER`]. Causes summarised by more than
-    /// one number have no single size and get none.
+    /// makes that happen with probability [`DETECTION_POWER`]; for an amplitude (a sine and a
+    /// cosine), whose phase decides how much of it the model holds, with that probability over
+    /// a phase drawn uniformly ([`PowerCurve::amplitude_limit`]). Causes summarised by more than one number
+    /// have no single size and get none.
     fn detection_limits(
         &self,
         sensitivity: &[Sensitivity],
         term: impl Fn(usize, usize) -> Term,
-        held_by: impl Fn(&Term) -> Vec<String>,
+        held_by: impl Fn(&DMat) -> Vec<Vec<String>>,
         (rss, dof): (f64, usize),
         variants_tested: usize,
     ) -> Vec<DetectionLimit> {
         let params = self.params;
         let sigma2 = rss / dof as f64;
         let gain = (1.0 - (1.0 - params.min_gain).powi(2)) * dof as f64;
+        let mut critical_of: BTreeMap<usize, f64> = BTreeMap::new();
         let mut lambda_of: BTreeMap<usize, f64> = BTreeMap::new();
-        sensitivity
+        // What holds the variants not separable: a few of each cause's, evenly spread, all
+        // regressed on the model at once.
+        let mut sampled: Vec<(usize, DVec)> = Vec::new();
+        // One power curve for every amplitude (its critical value depends on k = 2 alone).
+        let curve = std::cell::OnceCell::new();
+        let mut limits: Vec<DetectionLimit> = sensitivity
             .iter()
             .filter_map(|(ci, energies)| {
                 let t0 = &self.pool.variants[*ci][0];
@@ -1742,39 +1909,43 @@ impl Searcher<'_> {
                 {
                     return None;
                 }
-                let lambda = *lambda_of.entry(k).or_insert_with(|| {
+                let critical = *critical_of.entry(k).or_insert_with(|| {
                     let level = (params.alpha / variants_tested.max(1) as f64).min(1.0);
-                    let f = stats::f_isf(level, k as f64, (dof - k) as f64);
-                    stats::noncentral_chi2_power_noncentrality(
-                        (k as f64 * f).max(gain),
-                        k as f64,
-                        DETECTION_POWER,
-                    )
+                    (k as f64 * stats::f_isf(level, k as f64, (dof - k) as f64)).max(gain)
                 });
                 let rotary = exposed_by_rotary(self.obs, t0);
                 let variants = energies
                     .iter()
                     .map(|&(vi, e)| VariantLimit {
                         at: hyper_of(&term(*ci, vi).family, rotary).map(|h| h.0),
-                        size: e.map(|e| (lambda * sigma2 / e).sqrt()),
+                        size: e.map(|(lo, hi)| {
+                            if k == 1 {
+                                let lambda = *lambda_of.entry(k).or_insert_with(|| {
+                                    stats::noncentral_chi2_power_noncentrality(
+                                        critical,
+                                        1.0,
+                                        DETECTION_POWER,
+                                    )
+                                });
+                                (lambda * sigma2 / hi).sqrt()
+                            } else {
+                                curve
+                                    .get_or_init(|| PowerCurve::new(critical))
+                                    .amplitude_limit((lo, hi), sigma2)
+                            }
+                        }),
                     })
                     .collect();
-                // What holds the variants not separable: a few of them, evenly spread.
                 let hidden: Vec<usize> = energies
                     .iter()
                     .filter(|e| e.1.is_none())
                     .map(|e| e.0)
                     .collect();
-                let mut held: Vec<String> = Vec::new();
                 for &vi in hidden
                     .iter()
                     .step_by(hidden.len().div_ceil(HELD_BY_SAMPLES).max(1))
                 {
-                    for name in held_by(&term(*ci, vi)) {
-                        if !held.contains(&name) {
-                            held.push(name);
-                        }
-                    }
+                    sampled.push((*ci, term(*ci, vi).columns.column(0).into_owned()));
                 }
                 Some(DetectionLimit {
                     name: t0.name.clone(),
@@ -1783,10 +1954,25 @@ impl Searcher<'_> {
                     summary: t0.summary.clone(),
                     at_quantity: hyper_of(&t0.family, rotary).map(|h| h.1),
                     variants,
-                    held_by: held,
+                    held_by: Vec::new(),
                 })
             })
-            .collect()
+            .collect();
+        if sampled.is_empty() {
+            return limits;
+        }
+        let columns = DMat::from_columns(&sampled.iter().map(|s| s.1.clone()).collect::<Vec<_>>());
+        for ((ci, _), names) in sampled.iter().zip(held_by(&columns)) {
+            let name = &self.pool.variants[*ci][0].name;
+            if let Some(l) = limits.iter_mut().find(|l| &l.name == name) {
+                for n in names {
+                    if !l.held_by.contains(&n) {
+                        l.held_by.push(n);
+                    }
+                }
+            }
+        }
+        limits
     }
 
     /// Refines the hyper-parameter of every chosen term with all other terms fitted; keeps a
@@ -2754,6 +2940,112 @@ fn library_variant(
         .find(|t| t.name == name)
 }
 
+/// The power of the search's test against a sine-and-cosine cause: P(χ²(2, λ) > `critical`)
+/// tabulated once per step on a grid of √λ and interpolated, so that averaging it over phases
+/// ([`PowerCurve::amplitude_limit`]) for hundreds of variants costs no more than the scan.
+struct PowerCurve {
+    /// Grid step in √λ.
+    step: f64,
+    power: Vec<f64>,
+}
+
+impl PowerCurve {
+    /// Grid points; the curve rises from its level to 1 within about ±8 of √`critical` in √λ,
+    /// where linear interpolation is within 1e-4 of it.
+    const POINTS: usize = 512;
+
+    fn new(critical: f64) -> PowerCurve {
+        let top = critical.sqrt() + 10.0;
+        let step = top / (Self::POINTS - 1) as f64;
+        let power = (0..Self::POINTS)
+            .map(|i| stats::noncentral_chi2_sf(critical, 2.0, (i as f64 * step).powi(2)))
+            .collect();
+        PowerCurve { step, power }
+    }
+
+    fn at(&self, lambda: f64) -> f64 {
+        let x = lambda.max(0.0).sqrt() / self.step;
+        let i = x.floor() as usize;
+        if i + 1 >= self.power.len() {
+            return 1.0;
+        }
+        let f = x - i as f64;
+        self.power[i] * (1.0 - f) + self.power[i + 1] * f
+    }
+
+    /// The amplitude found with probability [`DETECTION_POWER`] when its phase is drawn
+    /// uniformly: with `lo`, `hi` the least and most whitened sum of squares a unit amplitude
+    /// leaves beyond the model ([`Increment::beyond`]), one at phase φ leaves
+    /// λ = a²·(hi·cos²φ + lo·sin²φ)/σ². The power is averaged over φ (midpoint rule on a quarter
+    /// turn, which the symmetry of cos² makes the whole turn). Where the model holds one phase
+    /// (`lo` ≈ 0), the causes at phases near it go unseen at any size and the limit is large.
+    fn amplitude_limit(&self, (lo, hi): (f64, f64), sigma2: f64) -> f64 {
+        const PHASES: usize = 16;
+        let share: Vec<f64> = (0..PHASES)
+            .map(|i| {
+                let phi = (i as f64 + 0.5) / PHASES as f64 * std::f64::consts::FRAC_PI_2;
+                phi.cos().powi(2) + lo / hi * phi.sin().powi(2)
+            })
+            .collect();
+        let power = |u: f64| share.iter().map(|s| self.at(u * s)).sum::<f64>() / PHASES as f64;
+        // u = a²·hi/σ².
+        let u = stats::bisect_increasing(power, DETECTION_POWER, 0.0, 1.0);
+        (u * sigma2 / hi).sqrt()
+    }
+}
+
+/// Whether `c` is a next order of an error of `model`: a completion ([`Role::Completion`])
+/// whose term it builds on is in the model (the caller checks that it is not in it yet).
+fn is_next_order(c: &dyn Candidate, model: &[Term]) -> bool {
+    c.role() == Role::Completion
+        && c.requires()
+            .is_none_or(|r| model.iter().any(|t| t.name == r))
+}
+
+/// The next order of every error of the (completed) base ([`is_next_order`]).
+fn next_orders(candidates: &[Box<dyn Candidate>], obs: &Observations, base: &[Term]) -> Vec<Term> {
+    candidates
+        .iter()
+        .filter(|c| is_next_order(c.as_ref(), base))
+        .filter_map(|c| c.variants(obs).into_iter().next())
+        .filter(|t| !base.iter().any(|b| b.name == t.name))
+        .collect()
+}
+
+/// For each of the final model's `causes` (its terms after the base): how much wider the
+/// cofactor of its coefficients grows when the next order of every base error is in the model
+/// — `G_wide⁻¹ − G⁻¹`, with `G` the Gram of its whitened columns once the base (fit `narrow`)
+/// and the other causes are projected out, and `G_wide` the same with the base's next orders
+/// in too (fit `wide`). A cause is found against a base of finite orders; where the data
+/// separate it from the base only through those orders (an R-test's angular positioning of C
+/// against the linear axes' higher orders along the ball's circle), its size rests on them,
+/// and this says by how much. `None`: the wider model holds the cause (it is not separable
+/// from the base's next orders).
+fn order_widening(narrow: &Projector, wide: &Projector, causes: &[Term]) -> Vec<Option<DMat>> {
+    causes
+        .iter()
+        .enumerate()
+        .map(|(k, t)| {
+            let others: Vec<&Term> = causes
+                .iter()
+                .enumerate()
+                .filter_map(|(j, o)| (j != k).then_some(o))
+                .collect();
+            let xo = design(&others, t.columns.nrows());
+            let (narrow, wide) = (narrow.extended(&xo), wide.extended(&xo));
+            if wide.increment(&t.columns).separability < SEPARABILITY_TOLERANCE {
+                return None;
+            }
+            let gram = |p: &Projector| {
+                let r = p.residual_part(&t.columns);
+                r.tr_mul(&r)
+            };
+            let inverse = |g: DMat| g.try_inverse();
+            Some(inverse(gram(&wide))? - inverse(gram(&narrow))?)
+        })
+        .collect()
+}
+
 /// The base completion called `name` on all observations.
 fn full_completion(
     candidates: &[Box<dyn Candidate>],
@@ -3024,32 +3316,37 @@ fn record_not_separable(
     out.push(NotSeparable {
         name: t.name.clone(),
         label: t.label.clone(),
-        confounded_with: confounded_with(t, model, x, fit),
+        confounded_with: confounded_with(&t.columns.columns(0, 1).into_owned(), model, x, fit)
+            .pop()
+            .unwrap_or_default(),
         separated_by: t.separated_by.clone(),
     });
 }
 
-/// The terms of the model (design `x`, fit `fit`) that `t`'s first column is made of: regressed
-/// on the model's columns, those carrying more than 5 % of the combination, largest first.
-fn confounded_with(t: &Term, model: &[Term], x: &DMat, fit: &Projector) -> Vec<String> {
-    let coef = fit.coefficients(&t.columns.column(0).into_owned());
-    let mut contributions: Vec<(String, f64)> = Vec::new();
-    let mut c = 0;
-    for m in model {
-        let k = m.width();
-        let mut share = 0.0;
-        for j in c..c + k {
-            share += (x.column(j) * coef[j]).norm();
-        }
-        contributions.push((m.name.clone(), share));
-        c += k;
-    }
-    let total: f64 = contributions.iter().map(|c| c.1).sum();
-    contributions.sort_by(|a, b| b.1.total_cmp(&a.1));
-    contributions
-        .into_iter()
-        .filter(|c| c.1 > 0.05 * total)
-        .map(|c| c.0)
+/// For each column of `c`, the terms of the model (design `x`, fit `fit`) it is made of:
+/// regressed on the model's columns, those carrying more than 5 % of the combination, largest
+/// first.
+fn confounded_with(c: &DMat, model: &[Term], x: &DMat, fit: &Projector) -> Vec<Vec<String>> {
+    let coef = fit.coefficients_of(c);
+    let norms: Vec<f64> = x.column_iter().map(|c| c.norm()).collect();
+    (0..c.ncols())
+        .map(|m| {
+            let mut contributions: Vec<(String, f64)> = Vec::new();
+            let mut at = 0;
+            for t in model {
+                let k = t.width();
+                let share = (at..at + k).map(|j| (coef[(j, m)] * norms[j]).abs()).sum();
+                contributions.push((t.name.clone(), share));
+                at += k;
+            }
+            let total: f64 = contributions.iter().map(|c| c.1).sum();
+            contributions.sort_by(|a, b| b.1.total_cmp(&a.1));
+            contributions
+                .into_iter()
+                .filter(|c| c.1 > 0.05 * total)
+                .map(|c| c.0)
+                .collect()
+        })
         .collect()
 }
 
@@ -3255,5 +3552,31 @@ mod tests {
             periodic("EXX periodic #2", 30.0, 0.4),
         ];
         assert_eq!(harmonic_families(&third).len(), 1);
+    }
+
+    /// An amplitude whose phase the model does not favour has the limit of a fixed
+    /// noncentrality; one the model holds at one phase has a larger limit, and its power
+    /// averaged over the phase (checked here by a finer quadrature) is 80 %.
+    #[test]
+    fn an_amplitude_limit_averages_the_power_over_the_phase() {
+        let critical = 30.0;
+        let curve = PowerCurve::new(critical);
+        let lambda = stats::noncentral_chi2_power_noncentrality(critical, 2.0, DETECTION_POWER);
+        let (sigma2, hi) = (0.7, 4.0);
+        let even = curve.amplitude_limit((hi, hi), sigma2);
+        approx::assert_relative_eq!(even, (lambda * sigma2 / hi).sqrt(), max_relative = 1e-3);
+        let lo = 0.05 * hi;
+        let uneven = curve.amplitude_limit((lo, hi), sigma2);
+        assert!(uneven > 1.5 * even, "{uneven} against {even}");
+        let phases = 2000;
+        let power = (0..phases)
+            .map(|i| {
+                let phi = (i as f64 + 0.5) / phases as f64 * std::f64::consts::PI;
+                let share = hi * phi.cos().powi(2) + lo * phi.sin().powi(2);
+                stats::noncentral_chi2_sf(critical, 2.0, uneven * uneven * share / sigma2)
+            })
+            .sum::<f64>()
+            / phases as f64;
+        approx::assert_abs_diff_eq!(power, DETECTION_POWER, epsilon = 2e-3);
     }
 }

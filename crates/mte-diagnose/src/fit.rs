@@ -601,14 +601,36 @@ pub(crate) struct Increment {
     /// Smallest fraction of a (normalised) candidate direction left after projecting out the
     /// current model: near 0 means the candidate is a combination of existing terms.
     pub separability: f64,
-    /// Whitened sum of squares a unit coefficient adds beyond the model, averaged over the
-    /// directions of the coefficients (`tr(C⊥ᵀ W² C⊥) / k`): what a cause of a given size
-    /// would show in these data.
-    pub energy: f64,
+    /// `C⊥ᵀ W² C⊥` (k × k), and the whitened norms of the columns before projection: what
+    /// [`Increment::beyond`] needs.
+    gram: DMat,
+    norms: Vec<f64>,
+}
+
+impl Increment {
+    /// The whitened sum of squares a unit coefficient vector adds beyond the model and beyond
+    /// more directions, at its least and its most over the directions of the coefficients
+    /// (the extreme eigenvalues of `C⊥ᵀ W² C⊥ − bᵀb`): what a cause of a given size would show
+    /// in these data, depending on its phase when it has two coefficients (a sine and a
+    /// cosine). `b = Nᵀ W C` (m × k) are the candidate's products with the further directions
+    /// (`N` orthonormal and orthogonal to the model, [`Projector::directions_beyond`]; m = 0:
+    /// none). `None` when they hold it (less than [`SEPARABILITY_TOLERANCE`] of a column's norm
+    /// left in some direction).
+    pub fn beyond(&self, b: &DMat) -> Option<(f64, f64)> {
+        if self.new_rank == 0 {
+            return None;
+        }
+        let g = &self.gram - b.tr_mul(b);
+        let normalised = DMat::from_fn(g.nrows(), g.ncols(), |i, j| {
+            g[(i, j)] / (self.norms[i] * self.norms[j])
+        });
+        (extreme_eigenvalues(&normalised).0.sqrt() >= SEPARABILITY_TOLERANCE)
+            .then(|| extreme_eigenvalues(&g))
+    }
 }
 
 /// `aᵀ b`, the inner loop of every scan, by faer's blocked, vectorised product.
-fn tr_mul(a: &DMat, b: &DMat) -> DMat {
+pub(crate) fn tr_mul(a: &DMat, b: &DMat) -> DMat {
     product(as_faer(a).transpose(), as_faer(b))
 }
 
@@ -763,6 +785,18 @@ impl Projector {
         &self.map * self.basis_of(c)
     }
 
+    /// [`Projector::coefficients`] of each column of `c`, by one product.
+    pub fn coefficients_of(&self, c: &DMat) -> DMat {
+        if self.q.ncols() == 0 {
+            return DMat::zeros(self.map.nrows(), c.ncols());
+        }
+        let mut cw = c.clone();
+        for mut column in cw.column_iter_mut() {
+            column.component_mul_assign(&self.w);
+        }
+        &self.map * tr_mul(&self.q, &cw)
+    }
+
     /// Columns of the model's design.
     pub fn design_columns(&self) -> usize {
         self.map.nrows()
@@ -802,6 +836,13 @@ impl Projector {
     pub fn separable_columns(&self, c: &DMat) -> Vec<usize> {
         let q = (self.q.ncols() > 0).then_some(&self.q);
         separable_columns(c, &self.w, q, &mut Directions::new(c.nrows(), c.ncols())).0
+    }
+
+    /// An orthonormal basis (whitened, n × m) of the directions the columns `c` add to the
+    /// model: for [`Increment::beyond`].
+    pub fn directions_beyond(&self, c: &DMat) -> DMat {
+        let (cw, _) = whitened_columns(c.clone(), &self.w);
+        beyond(&self.q, cw).q
     }
 
     /// Whitened `c` with the current model projected out.
@@ -962,7 +1003,8 @@ impl Projector {
             delta_rss: 0.0,
             new_rank: 0,
             separability: 0.0,
-            energy: 0.0,
+            gram: DMat::zeros(0, 0),
+            norms: Vec::new(),
         };
         if k == 0 {
             return none;
@@ -975,7 +1017,7 @@ impl Projector {
             g -= a.tr_mul(&a);
             b -= a.tr_mul(&self.qtr);
         }
-        let energy = g.trace().max(0.0) / k as f64;
+        let gram = g.clone();
         for i in 0..k {
             b[i] /= norms[i];
             for j in 0..k {
@@ -1024,9 +1066,28 @@ impl Projector {
                 .fold(0.0, |d, (l, v)| d + v.dot(&b).powi(2) / l),
             new_rank: directions.len(),
             separability: lambda_min.max(0.0).sqrt(),
-            energy,
+            gram,
+            norms,
         }
     }
+}
+
+/// The least and the largest eigenvalue of a symmetric matrix (closed form up to 2 × 2), both
+/// at least 0.
+fn extreme_eigenvalues(g: &DMat) -> (f64, f64) {
+    let (lo, hi) = match g.ncols() {
+        1 => (g[(0, 0)], g[(0, 0)]),
+        2 => {
+            let (a, c, d) = (g[(0, 0)], g[(0, 1)], g[(1, 1)]);
+            let (mean, half) = (0.5 * (a + d), (0.5 * (a - d)).hypot(c));
+            (mean - half, mean + half)
+        }
+        _ => {
+            let e = g.clone().symmetric_eigenvalues();
+            (e.min(), e.max())
+        }
+    };
+    (lo.max(0.0), hi.max(0.0))
 }
 
 /// The eigenpairs `(λ, v)` of the normalised Gram matrix of a candidate's columns with the

@@ -401,8 +401,9 @@ fn invert_cdf(cdf: impl Fn(f64) -> f64, p: f64, lo: f64, hi: f64) -> f64 {
 }
 
 /// Solves `f(x) = target` for a non-decreasing `f` by bisection, starting from [lo, hi] and
-/// doubling `hi` until `f(hi)` reaches the target (200 halvings reach f64 resolution).
-fn bisect_increasing(f: impl Fn(f64) -> f64, target: f64, mut lo: f64, mut hi: f64) -> f64 {
+/// doubling `hi` until `f(hi)` reaches the target (200 halvings reach f64 resolution; it stops
+/// at a relative width of 1e-14).
+pub fn bisect_increasing(f: impl Fn(f64) -> f64, target: f64, mut lo: f64, mut hi: f64) -> f64 {
     while f(hi) < target && hi.is_finite() {
         hi *= 2.0;
     }

@@ -417,14 +417,18 @@ pub(crate) fn write(spec: &Spec, rng: &mut ChaCha8Rng, dir: &Path) -> std::io::R
                 harmonic,
                 urad,
             } if rotary < 2 => {
-                m.rotary[rotary].harmonic =
-                    Some((urad * 1e-6, harmonic as f64, rng.random_range(0.0..TAU)));
+                let (k, phase) = (harmonic as f64, rng.random_range(0.0..TAU));
+                m.rotary[rotary].harmonic = Some((urad * 1e-6, k, phase));
+                // The machine's angular positioning error at this harmonic: the hidden one plus
+                // the ordinary error motion's component (B: about Y, C: about Z).
+                let (a, b) = m.rotary[rotary].e[rotary + 1].component(k);
+                let total = (a + urad * 1e-6 * phase.cos()).hypot(b + urad * 1e-6 * phase.sin());
                 effects.push(TrueEffect {
                     iso_name_hint: ["EBB", "ECC"][rotary].into(),
                     kind: EffectKind::AngularPositioning,
                     size: urad,
                     unit: "urad",
-                    value: urad.abs() * 1e-6,
+                    value: total,
                     signed: false,
                     period: Some((["B", "C"][rotary].into(), TAU / harmonic as f64)),
                     detail: format!("harmonic {harmonic} of a turn"),

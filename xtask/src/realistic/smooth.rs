@@ -132,6 +132,16 @@ impl Periodic {
         Self { harmonics }
     }
 
+    /// Its component of `k` cycles per turn as `(a, b)` of `a·sin(kθ) + b·cos(kθ)`.
+    pub fn component(&self, k: f64) -> (f64, f64) {
+        self.harmonics
+            .iter()
+            .filter(|h| h.1 == k)
+            .fold((0.0, 0.0), |(a, b), (amp, _, ph)| {
+                (a + amp * ph.cos(), b + amp * ph.sin())
+            })
+    }
+
     /// The value at angle `theta` (rad).
     pub fn at(&self, theta: f64) -> f64 {
         self.harmonics
