@@ -709,9 +709,9 @@ fn conclude(
         for (k, widening) in widening.into_iter().enumerate() {
             let width = causes[k].width();
             match widening {
-                Some(d) => {
+                Some((narrow, wide)) => {
                     let mut block = cov.view_mut((at, at), (width, width));
-                    block += d * scale;
+                    block += (wide - narrow) * scale;
                 }
                 None => undetermined = undetermined.or(Some(k)),
             }
@@ -1803,7 +1803,8 @@ impl Searcher<'_> {
             .filter(|t| !terms.iter().any(|m| m.name == t.name))
             .collect();
         let x_next = design(&next.iter().collect::<Vec<_>>(), obs.len());
-        let directions = projector.directions_beyond(&x_next);
+        let fit = projector.extended(&x_next);
+        let directions = fit.directions_beyond(projector);
         let flat: Vec<(usize, usize, &Increment)> = sensitivity
             .iter()
             .flat_map(|(ci, incs)| {
@@ -1856,7 +1857,6 @@ impl Searcher<'_> {
             .collect();
         let model: Vec<Term> = terms.iter().chain(&next).cloned().collect();
         let x_model = hcat(x, &x_next);
-        let fit = projector.extended(&x_next);
         self.detection_limits(
             &sensitivity,
             |ci, vi| term_of(ci, vi).clone(),
@@ -2106,6 +2106,58 @@ impl Searcher<'_> {
             .collect()
     }
 
+    /// Removes, one at a time (the least determined first, with what builds on it), the causes
+    /// that rest on the base's orders alone ([`order_widening`]): those the next order of every
+    /// base error would hold, or whose size, with its cofactor widened by those orders, is within
+    /// 2 u of zero. `base_fit`: the fit of this searcher's base under the weights the search
+    /// ran with; returns the design and fit of the model that remains. The final model applies the same rule with the uncertainties of periods and
+    /// time constants added ([`conclude`]); an outer fold's search, whose causes only predict
+    /// its held-out rows, uses the cofactor alone.
+    fn drop_resting_on_orders(
+        &self,
+        chosen: &mut Vec<Chosen>,
+        base_fit: &Projector,
+    ) -> (DMat, Projector) {
+        let next = next_orders(self.candidates, self.obs, self.base);
+        let wide = (!chosen.is_empty() && !next.is_empty())
+            .then(|| base_fit.extended(&design(&next.iter().collect::<Vec<_>>(), self.obs.len())));
+        loop {
+            let terms = self.with(chosen, None);
+            let (x, fit) = self.fit_of(base_fit, &terms);
+            let Some(wide) = wide.as_ref().filter(|_| !chosen.is_empty()) else {
+                return (x, fit);
+            };
+            let causes = &terms[self.base.len()..];
+            let coef = fit.coefficients(&self.obs.values);
+            let scale = covariance_scale(self.obs, (fit.rss_w() / fit.dof().max(1) as f64).sqrt());
+            let mut at: usize = self.base.iter().map(Term::width).sum();
+            let z: Vec<f64> = causes
+                .iter()
+                .zip(order_widening(base_fit, wide, causes))
+                .map(|(t, widening)| {
+                    let k = t.width();
+                    let c = coef.rows(at, k).into_owned();
+                    at += k;
+                    widening.map_or(0.0, |(_, wide)| {
+                        t.estimates(c.as_slice(), &(wide * scale))
+                            .iter()
+                            .map(|e| e.value.abs() / e.uncertainty.max(1e-300))
+                            .fold(0.0, f64::max)
+                    })
+                })
+                .collect();
+            let Some((k, _)) = z
+                .iter()
+                .enumerate()
+                .filter(|(_, z)| **z < 2.0)
+                .min_by(|a, b| a.1.total_cmp(b.1))
+            else {
+                return (x, fit);
+            };
+            self.remove(chosen, k);
+        }
+    }
+
     /// The outer folds: for each, the base model and the whole search on the other folds
     /// predict it. `base_fit`: the base's fit under `w`, which
     /// each fold downdates for its held-out rows.
@@ -2142,21 +2194,24 @@ impl Searcher<'_> {
                     base: &completed,
                     ..*self
                 };
-                let held_out_residuals = |terms: &[Term]| -> Vec<f64> {
-                    let (x, fit) = searcher.fit_of(&fold_fit, terms);
+                // As the final model does, the causes that rest on the base's orders alone leave.
+                let mut chosen = found.chosen;
+                let (x_base, completed_fit) = searcher.fit_of(&fold_fit, &completed);
+                let (x, fit) = searcher.drop_resting_on_orders(&mut chosen, &completed_fit);
+                let held_out_residuals = |x: &DMat, fit: &Projector| -> Vec<f64> {
                     let coef = fit.coefficients(&obs.values);
                     test.iter()
                         .map(|&i| obs.values[i] - x.row(i).transpose().dot(&coef))
                         .collect()
                 };
-                let base = held_out_residuals(&completed);
-                let diagnosed = held_out_residuals(&searcher.with(&found.chosen, None));
+                let base = held_out_residuals(&x_base, &completed_fit);
+                let diagnosed = held_out_residuals(&x, &fit);
                 let residuals = test
                     .iter()
                     .enumerate()
                     .map(|(k, &i)| (i, base[k], diagnosed[k]))
                     .collect();
-                let names = found.chosen.iter().map(|c| c.term.name.clone()).collect();
+                let names = chosen.iter().map(|c| c.term.name.clone()).collect();
                 (residuals, names)
             })
             .collect();
@@ -3012,16 +3067,20 @@ fn next_orders(candidates: &[Box<dyn Candidate>], obs: &Observations, base: &[Te
         .collect()
 }
 
-/// For each of the final model's `causes` (its terms after the base): how much wider the
-/// cofactor of its coefficients grows when the next order of every base error is in the model
-/// — `G_wide⁻¹ − G⁻¹`, with `G` the Gram of its whitened columns once the base (fit `narrow`)
-/// and the other causes are projected out, and `G_wide` the same with the base's next orders
-/// in too (fit `wide`). A cause is found against a base of finite orders; where the data
+/// For each of the final model's `causes` (its terms after the base): the cofactor of its
+/// coefficients, `G⁻¹`, and what it grows to when the next order of every base error is in the
+/// model, `G_wide⁻¹` — `G` the Gram of its whitened columns once the base (fit `narrow`) and
+/// the other causes are projected out, `G_wide` the same with the base's next orders in too
+/// (fit `wide`). A cause is found against a base of finite orders; where the data
 /// separate it from the base only through those orders (an R-test's angular positioning of C
 /// against the linear axes' higher orders along the ball's circle), its size rests on them,
 /// and this says by how much. `None`: the wider model holds the cause (it is not separable
 /// from the base's next orders).
-fn order_widening(narrow: &Projector, wide: &Projector, causes: &[Term]) -> Vec<Option<DMat>> {
+fn order_widening(
+    narrow: &Projector,
+    wide: &Projector,
+    causes: &[Term],
+) -> Vec<Option<(DMat, DMat)>> {
     causes
         .iter()
         .enumerate()
@@ -3041,7 +3100,7 @@ fn order_widening(narrow: &Projector, wide: &Projector, causes: &[Term]) -> Vec<
                 r.tr_mul(&r)
             };
             let inverse = |g: DMat| g.try_inverse();
-            Some(inverse(gram(&wide))? - inverse(gram(&narrow))?)
+            Some((inverse(gram(&narrow))?, inverse(gram(&wide))?))
         })
         .collect()
 }

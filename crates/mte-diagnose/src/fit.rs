@@ -838,11 +838,12 @@ impl Projector {
         separable_columns(c, &self.w, q, &mut Directions::new(c.nrows(), c.ncols())).0
     }
 
-    /// An orthonormal basis (whitened, n × m) of the directions the columns `c` add to the
-    /// model: for [`Increment::beyond`].
-    pub fn directions_beyond(&self, c: &DMat) -> DMat {
-        let (cw, _) = whitened_columns(c.clone(), &self.w);
-        beyond(&self.q, cw).q
+    /// An orthonormal basis (whitened, n × m) of the directions this fit's model adds to the
+    /// model of `narrower`, which it extends ([`Projector::extended`]): for
+    /// [`Increment::beyond`].
+    pub fn directions_beyond(&self, narrower: &Projector) -> DMat {
+        let r = narrower.q.ncols();
+        self.q.columns(r, self.q.ncols() - r).into_owned()
     }
 
     /// Whitened `c` with the current model projected out.
