@@ -167,6 +167,9 @@ pub struct NotSeparable {
     pub confounded_with: Vec<String>,
     /// The measurement that would separate it.
     pub separated_by: Option<String>,
+    /// Found by the search, but separable only through the orders the base stops at: the
+    /// combination above is with the next order of every base error in the model.
+    pub rests_on_orders: bool,
 }
 
 /// The smallest size at which a library cause the search did not find would have been found:
@@ -747,13 +750,21 @@ fn conclude(
                 .chain(others.iter().copied())
                 .cloned()
                 .collect();
-            record_not_separable(
-                &mut not_separable,
-                &causes[k],
-                &model,
-                &hcat(&hcat(&x0, &x_next), &x_others),
-                &base_and_next().extended(&x_others),
-            );
+            let t = &causes[k];
+            not_separable.push(NotSeparable {
+                name: t.name.clone(),
+                label: t.label.clone(),
+                confounded_with: confounded_with(
+                    &t.columns.columns(0, 1).into_owned(),
+                    &model,
+                    &hcat(&hcat(&x0, &x_next), &x_others),
+                    &base_and_next().extended(&x_others),
+                )
+                .pop()
+                .unwrap_or_default(),
+                separated_by: t.separated_by.clone(),
+                rests_on_orders: true,
+            });
             rests_on_orders.push(causes[k].name.clone());
         }
         pruned.extend(searcher.remove(&mut chosen, k));
@@ -3298,6 +3309,7 @@ fn separable_base(
                 label: t.label.clone(),
                 confounded_with: Vec::new(),
                 separated_by: t.separated_by.clone(),
+                rests_on_orders: false,
             });
             ns.name = t.coefficients[j].0.clone();
             ns
@@ -3379,6 +3391,7 @@ fn record_not_separable(
             .pop()
             .unwrap_or_default(),
         separated_by: t.separated_by.clone(),
+        rests_on_orders: false,
     });
 }
 

@@ -300,9 +300,14 @@ fn not_separable_section(
     for n in items {
         let _ = writeln!(
             s,
-            "- {} ({}) is a combination of {}{consequence}.{}",
+            "- {} ({}) {} {}{consequence}.{}",
             n.name,
             n.label,
+            if n.rests_on_orders {
+                "was found, but with the next order of every base error in the model it is nearly a combination of"
+            } else {
+                "is a combination of"
+            },
             n.confounded_with.join(", "),
             n.separated_by
                 .as_ref()
