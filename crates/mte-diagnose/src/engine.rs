@@ -682,11 +682,17 @@ fn conclude(
         gauss_newton_hyper(&searcher, &mut chosen, w);
     }
     let mut pruned = search.pruned;
-    // The next order of every base error, for the uncertainty of the base's orders.
-    let next_orders = next_orders(candidates, obs, &base);
-    let x_next = design(&next_orders.iter().collect::<Vec<_>>(), n);
-    let base_and_next = std::cell::OnceCell::new();
-    let base_and_next = || base_and_next.get_or_init(|| base_fit.extended(&x_next));
+    // The next order of every base error, its design and the base's fit with it, for the
+    // uncertainty of the base's orders (only once there is a cause to widen).
+    let with_next = std::cell::OnceCell::new();
+    let with_next = || {
+        with_next.get_or_init(|| {
+            let terms = next_orders(candidates, obs, &base);
+            let x = design(&terms.iter().collect::<Vec<_>>(), n);
+            let fit = base_fit.extended(&x);
+            (terms, x, fit)
+        })
+    };
     let mut not_separable = search.not_separable;
     let mut rests_on_orders: Vec<String> = Vec::new();
     let (terms, x, sol, fit, extended, hyper_u, extended_parameters) = loop {
@@ -707,7 +713,7 @@ fn conclude(
         let widening = if causes.is_empty() {
             Vec::new()
         } else {
-            order_widening(&base_fit, base_and_next(), causes)
+            order_widening(&base_fit, &with_next().2, causes)
         };
         for (k, widening) in widening.into_iter().enumerate() {
             let width = causes[k].width();
@@ -721,13 +727,7 @@ fn conclude(
             at += width;
         }
         let extended_parameters = parameters(&terms, &sol.coef, &cov);
-        let z = |p: &[ParameterEstimate], k: usize| {
-            p[base.len() + k]
-                .estimates
-                .iter()
-                .map(|e| e.value.abs() / e.uncertainty.max(1e-300))
-                .fold(0.0, f64::max)
-        };
+        let z = |p: &[ParameterEstimate], k: usize| largest_z(&p[base.len() + k].estimates);
         let weakest = (0..chosen.len())
             .map(|k| (k, z(&extended_parameters, k)))
             .filter(|(_, z)| *z < 2.0)
@@ -744,9 +744,10 @@ fn conclude(
                 .filter_map(|(j, t)| (j != k).then_some(t))
                 .collect();
             let x_others = design(&others, n);
+            let (next, x_next, base_and_next) = with_next();
             let model: Vec<Term> = base
                 .iter()
-                .chain(&next_orders)
+                .chain(next)
                 .chain(others.iter().copied())
                 .cloned()
                 .collect();
@@ -757,8 +758,8 @@ fn conclude(
                 confounded_with: confounded_with(
                     &t.columns.columns(0, 1).into_owned(),
                     &model,
-                    &hcat(&hcat(&x0, &x_next), &x_others),
-                    &base_and_next().extended(&x_others),
+                    &hcat(&hcat(&x0, x_next), &x_others),
+                    &base_and_next.extended(&x_others),
                 )
                 .pop()
                 .unwrap_or_default(),
@@ -907,7 +908,7 @@ fn conclude(
     let mut notes = Vec::new();
     if !rests_on_orders.is_empty() {
         const NAMED: usize = 6;
-        let names: Vec<&str> = next_orders.iter().map(|t| t.name.as_str()).collect();
+        let names: Vec<&str> = with_next().0.iter().map(|t| t.name.as_str()).collect();
         notes.push(format!(
             "{} found by the search but left out: these data tell {} from the base model only through the orders the base stops at. With the next order of every base error in the model ({}{}), {} size is not determined: it rests on the assumption that the base errors have no higher orders, not on the data",
             rests_on_orders.join(", "),
@@ -1373,19 +1374,8 @@ impl Searcher<'_> {
         let terms: Vec<&Term> = self.base.iter().chain(model).collect();
         let mut eligible = 0usize;
         let mut tested: Vec<(usize, f64)> = Vec::new();
-        for ci in 0..self.pool.variants.len() {
-            let c = self.candidate(ci);
-            if c.role() != Role::Completion
-                || !c
-                    .requires()
-                    .is_none_or(|r| terms.iter().any(|t| t.name == r))
-            {
-                continue;
-            }
+        for ci in self.next_order_entries(&terms) {
             let t = &self.pool.variants[ci][0];
-            if terms.iter().any(|m| m.name == t.name) {
-                continue;
-            }
             // A block of orders may hold some the model already has (confounded components
             // of a point measurement): it is tested on the new directions it brings.
             let inc = fit.increment(&t.columns);
@@ -1404,6 +1394,29 @@ impl Searcher<'_> {
                 let keep = fit.separable_columns(&t.columns);
                 (!keep.is_empty()).then(|| keep_columns(t.clone(), &keep))
             })
+    }
+
+    /// The pool entries that are a next order of an error of the model `terms` and not in it
+    /// ([`is_next_order`]).
+    fn next_order_entries(&self, terms: &[&Term]) -> Vec<usize> {
+        let in_model = |name: &str| terms.iter().any(|t| t.name == name);
+        (0..self.pool.variants.len())
+            .filter(|&ci| {
+                is_next_order(self.candidate(ci), in_model)
+                    && self.pool.variants[ci]
+                        .first()
+                        .is_some_and(|t| !in_model(&t.name))
+            })
+            .collect()
+    }
+
+    /// The next orders of the errors of the model `terms`, from the pool
+    /// ([`Searcher::next_order_entries`]).
+    fn next_orders(&self, terms: &[Term]) -> Vec<Term> {
+        self.next_order_entries(&terms.iter().collect::<Vec<_>>())
+            .into_iter()
+            .map(|ci| self.pool.variants[ci][0].clone())
+            .collect()
     }
 
     /// Forward search, then backward pruning. `held_out` as in [`Searcher::search`];
@@ -1808,11 +1821,7 @@ impl Searcher<'_> {
                 .get(&(ci, vi))
                 .unwrap_or(&self.pool.variants[ci][vi])
         };
-        let next: Vec<Term> = (0..self.pool.variants.len())
-            .filter(|&ci| is_next_order(self.candidate(ci), terms))
-            .filter_map(|ci| self.pool.variants[ci].first().cloned())
-            .filter(|t| !terms.iter().any(|m| m.name == t.name))
-            .collect();
+        let next = self.next_orders(terms);
         let x_next = design(&next.iter().collect::<Vec<_>>(), obs.len());
         let fit = projector.extended(&x_next);
         let directions = fit.directions_beyond(projector);
@@ -1828,22 +1837,27 @@ impl Searcher<'_> {
             .par_chunks(BLOCK)
             .flat_map_iter(|chunk| {
                 let width: usize = chunk.iter().map(|c| term_of(c.0, c.1).width()).sum();
-                // The block's whitened columns, side by side.
-                let wc = DMat::from_iterator(
-                    obs.len(),
-                    width,
-                    chunk.iter().flat_map(|&(ci, vi, _)| {
-                        let c = &term_of(ci, vi).columns;
-                        let (n, data) = (c.nrows(), c.as_slice());
-                        (0..c.ncols()).flat_map(move |j| {
-                            data[j * n..(j + 1) * n]
-                                .iter()
-                                .zip(w.iter())
-                                .map(|(c, w)| c * w)
-                        })
-                    }),
-                );
-                let b = tr_mul(&directions, &wc);
+                // The block's whitened columns, side by side, and their products with the
+                // directions (none without next orders: the energies beyond the model itself).
+                let b = if directions.ncols() == 0 {
+                    DMat::zeros(0, width)
+                } else {
+                    let wc = DMat::from_iterator(
+                        obs.len(),
+                        width,
+                        chunk.iter().flat_map(|&(ci, vi, _)| {
+                            let c = &term_of(ci, vi).columns;
+                            let (n, data) = (c.nrows(), c.as_slice());
+                            (0..c.ncols()).flat_map(move |j| {
+                                data[j * n..(j + 1) * n]
+                                    .iter()
+                                    .zip(w.iter())
+                                    .map(|(c, w)| c * w)
+                            })
+                        }),
+                    );
+                    tr_mul(&directions, &wc)
+                };
                 let mut at = 0;
                 chunk
                     .iter()
@@ -2121,15 +2135,16 @@ impl Searcher<'_> {
     /// that rest on the base's orders alone ([`order_widening`]): those the next order of every
     /// base error would hold, or whose size, with its cofactor widened by those orders, is within
     /// 2 u of zero. `base_fit`: the fit of this searcher's base under the weights the search
-    /// ran with; returns the design and fit of the model that remains. The final model applies the same rule with the uncertainties of periods and
-    /// time constants added ([`conclude`]); an outer fold's search, whose causes only predict
-    /// its held-out rows, uses the cofactor alone.
+    /// ran with; returns the design and fit of the model that remains. The final model applies
+    /// the same rule with the uncertainties of periods and time constants added
+    /// ([`conclude`]); an outer fold's search, whose causes only predict its held-out rows,
+    /// uses the cofactor alone.
     fn drop_resting_on_orders(
         &self,
         chosen: &mut Vec<Chosen>,
         base_fit: &Projector,
     ) -> (DMat, Projector) {
-        let next = next_orders(self.candidates, self.obs, self.base);
+        let next = self.next_orders(self.base);
         let wide = (!chosen.is_empty() && !next.is_empty())
             .then(|| base_fit.extended(&design(&next.iter().collect::<Vec<_>>(), self.obs.len())));
         loop {
@@ -2150,10 +2165,7 @@ impl Searcher<'_> {
                     let c = coef.rows(at, k).into_owned();
                     at += k;
                     widening.map_or(0.0, |(_, wide)| {
-                        t.estimates(c.as_slice(), &(wide * scale))
-                            .iter()
-                            .map(|e| e.value.abs() / e.uncertainty.max(1e-300))
-                            .fold(0.0, f64::max)
+                        largest_z(&t.estimates(c.as_slice(), &(wide * scale)))
                     })
                 })
                 .collect();
@@ -3060,21 +3072,31 @@ impl PowerCurve {
     }
 }
 
-/// Whether `c` is a next order of an error of `model`: a completion ([`Role::Completion`])
-/// whose term it builds on is in the model (the caller checks that it is not in it yet).
-fn is_next_order(c: &dyn Candidate, model: &[Term]) -> bool {
-    c.role() == Role::Completion
-        && c.requires()
-            .is_none_or(|r| model.iter().any(|t| t.name == r))
+/// The largest |estimate| / u of a term's estimates: below 2 its size is not determined.
+fn largest_z(estimates: &[Estimate]) -> f64 {
+    estimates
+        .iter()
+        .map(|e| e.value.abs() / e.uncertainty.max(1e-300))
+        .fold(0.0, f64::max)
 }
 
-/// The next order of every error of the (completed) base ([`is_next_order`]).
+/// Whether `c` may be a next order of an error of a model (`in_model` tells its terms by
+/// name): a completion ([`Role::Completion`]) whose term it builds on is in the model. The
+/// caller checks that its own term is not in it yet.
+fn is_next_order(c: &dyn Candidate, in_model: impl Fn(&str) -> bool) -> bool {
+    c.role() == Role::Completion && c.requires().is_none_or(in_model)
+}
+
+/// The next order of every error of the (completed) base ([`is_next_order`]), evaluated on
+/// `obs` (the final model's, which no pool holds; a search takes them from its pool,
+/// [`Searcher::next_order_entries`]).
 fn next_orders(candidates: &[Box<dyn Candidate>], obs: &Observations, base: &[Term]) -> Vec<Term> {
+    let in_base = |name: &str| base.iter().any(|t| t.name == name);
     candidates
         .iter()
-        .filter(|c| is_next_order(c.as_ref(), base))
+        .filter(|c| is_next_order(c.as_ref(), in_base))
         .filter_map(|c| c.variants(obs).into_iter().next())
-        .filter(|t| !base.iter().any(|b| b.name == t.name))
+        .filter(|t| !in_base(&t.name))
         .collect()
 }
 
