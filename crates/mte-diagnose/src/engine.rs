@@ -1372,19 +1372,20 @@ impl Searcher<'_> {
     fn next_completion(&self, model: &[Term], fit: &Projector) -> Option<Term> {
         let (rss, dof) = (fit.rss_w(), fit.dof());
         let terms: Vec<&Term> = self.base.iter().chain(model).collect();
-        let mut eligible = 0usize;
-        let mut tested: Vec<(usize, f64)> = Vec::new();
-        for ci in self.next_order_entries(&terms) {
-            let t = &self.pool.variants[ci][0];
-            // A block of orders may hold some the model already has (confounded components
-            // of a point measurement): it is tested on the new directions it brings.
-            let inc = fit.increment(&t.columns);
-            if inc.new_rank == 0 {
-                continue;
-            }
-            eligible += 1;
-            tested.push((ci, f_test(rss, inc.delta_rss, inc.new_rank, dof)));
-        }
+        let entries = self.next_order_entries(&terms);
+        // One product with the model's basis per batch of entries, not one per entry.
+        let increments = fit.increments(entries.len(), |i| {
+            Cow::Borrowed(&self.pool.variants[entries[i]][0].columns)
+        });
+        // A block of orders may hold some the model already has (confounded components of a
+        // point measurement): it is tested on the new directions it brings.
+        let mut tested: Vec<(usize, f64)> = entries
+            .iter()
+            .zip(&increments)
+            .filter(|(_, inc)| inc.new_rank > 0)
+            .map(|(&ci, inc)| (ci, f_test(rss, inc.delta_rss, inc.new_rank, dof)))
+            .collect();
+        let eligible = tested.len();
         tested.sort_by(|a, b| a.1.total_cmp(&b.1));
         tested
             .into_iter()

@@ -695,9 +695,11 @@ impl Projector {
         let Beyond { a, v, q: qc } = beyond(&self.q, cw);
         let m = qc.ncols();
         // [W X, W c] · [map, −map a v; 0, diag(scale) v] = [Q, qc].
-        let mut q = DMat::zeros(n, r + m);
-        q.columns_mut(0, r).copy_from(&self.q);
-        q.columns_mut(r, m).copy_from(&qc);
+        // Column-major: the old basis, then the new directions (no zeroed n × (r + m) first).
+        let mut data = Vec::with_capacity(n * (r + m));
+        data.extend_from_slice(self.q.as_slice());
+        data.extend_from_slice(qc.as_slice());
+        let q = DMat::from_vec(n, r + m, data);
         let mut map = DMat::zeros(p + k, r + m);
         map.view_mut((0, 0), (p, r)).copy_from(&self.map);
         if r > 0 {
