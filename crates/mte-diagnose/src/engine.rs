@@ -1102,6 +1102,22 @@ struct Pool {
     products: Products,
     /// Their shares of the outer folds' test rows ([`Searcher::held_out`]).
     fold_shares: Vec<Products>,
+    /// The weights' squares and the outer folds' test rows the products were formed with.
+    w2: DVec,
+    /// Terms of the base the products are of (a search's base is these, then completions).
+    base_terms: usize,
+    outer: Vec<Vec<usize>>,
+    /// The products of a completion's columns with every variant, by pool entry, formed by the
+    /// first search that completes its base with it and shared by the others (the main search
+    /// and the outer folds' mostly complete with the same orders).
+    completion_products: std::sync::Mutex<HashMap<usize, std::sync::Arc<EntryProducts>>>,
+}
+
+/// `Cᵢᵀ W² C` of one pool entry's first variant `Cᵢ` with every variant's columns `C` side by
+/// side: on all rows, and the share of each outer fold's test rows.
+struct EntryProducts {
+    all: DMat,
+    shares: Vec<DMat>,
 }
 
 /// `Xᵀ W² C`, `yᵀ W² C` and each variant's `Cᵀ W² C`: the base design `X` and the
@@ -1180,6 +1196,10 @@ impl Pool {
             offsets,
             products: Products::default(),
             fold_shares: Vec::new(),
+            w2: DVec::zeros(0),
+            base_terms: base.len(),
+            outer: outer.to_vec(),
+            completion_products: Default::default(),
         };
         // The outer folds' test rows partition the observations: the products are formed per
         // fold (a fold's search subtracts its own share) and summed.
@@ -1215,6 +1235,7 @@ impl Pool {
         if shares.len() > 1 {
             pool.fold_shares = shares;
         }
+        pool.w2 = w2;
         pool
     }
 
@@ -1248,17 +1269,93 @@ impl Pool {
         out
     }
 
-    /// The products for a search whose base design `x` is the pool's base then its
-    /// completions, under the pool's weights `w` except on the rows of the outer fold
+    /// The products for a search whose base is the pool's base then the terms `completed`
+    /// (design `x`), under the pool's weights `w` except on the rows of the outer fold
     /// `held_out` (weight zero): the pool's products less that fold's share, plus the
-    /// completions' rows.
-    fn search_products(&self, x: &DMat, w: &DVec, held_out: Option<usize>) -> Products {
+    /// completions' rows — from [`Pool::entry_products`] where a completion is a pool entry's
+    /// columns, formed directly otherwise.
+    fn search_products(
+        &self,
+        completed: &[Term],
+        x: &DMat,
+        w: &DVec,
+        held_out: Option<usize>,
+    ) -> Products {
         let mut products = self.products.clone();
         if let Some(k) = held_out {
             products.add(&self.fold_shares[k], -1.0);
         }
-        products.x = self.model_products(&products.x, x, w);
+        let mut rows = vec![std::mem::take(&mut products.x)];
+        for t in completed {
+            match self.completion_rows(t, held_out) {
+                Some(r) => rows.push(r),
+                None => {
+                    let p = rows.iter().map(DMat::nrows).sum::<usize>();
+                    let c = x.columns(p, t.width()).into_owned();
+                    rows.push(weighted_products(
+                        &c,
+                        &w.component_mul(w),
+                        None,
+                        &self.column_blocks(),
+                    ));
+                }
+            }
+        }
+        let total = rows.iter().map(DMat::nrows).sum();
+        let mut x_products = DMat::zeros(total, rows[0].ncols());
+        let mut at = 0;
+        for r in rows {
+            x_products.rows_mut(at, r.nrows()).copy_from(&r);
+            at += r.nrows();
+        }
+        products.x = x_products;
         products
+    }
+
+    /// The rows `tᵀ W² C` of a completion `t` whose columns are some of a pool entry's first
+    /// variant's ([`keep_columns`]), for the search without the outer fold `held_out`; `None`
+    /// when `t` is no such entry's.
+    fn completion_rows(&self, t: &Term, held_out: Option<usize>) -> Option<DMat> {
+        let &ci = self.by_name.get(&t.name)?;
+        let entry = &self.variants[ci][0].columns;
+        let columns: Vec<usize> = t
+            .columns
+            .column_iter()
+            .map(|c| entry.column_iter().position(|e| e == c))
+            .collect::<Option<_>>()?;
+        let products = self.entry_products(ci);
+        let mut rows = products.all.select_rows(&columns);
+        if let Some(k) = held_out {
+            rows -= products.shares[k].select_rows(&columns);
+        }
+        Some(rows)
+    }
+
+    /// The products of pool entry `ci`'s first variant with every variant ([`EntryProducts`]),
+    /// formed on first use. Formed outside the lock (a search that meets an entry another is
+    /// forming forms it too: the same numbers, kept once), so no search waits on another.
+    fn entry_products(&self, ci: usize) -> std::sync::Arc<EntryProducts> {
+        let cache = || self.completion_products.lock().expect("no search panicked");
+        if let Some(p) = cache().get(&ci) {
+            return p.clone();
+        }
+        let c = &self.variants[ci][0].columns;
+        let blocks = self.column_blocks();
+        let shares: Vec<DMat> = if self.outer.is_empty() {
+            vec![weighted_products(c, &self.w2, None, &blocks)]
+        } else {
+            self.outer
+                .iter()
+                .map(|rows| weighted_products(c, &self.w2, Some(rows), &blocks))
+                .collect()
+        };
+        // Summed in fold order, as the pool's own products are.
+        let mut all = shares[0].clone();
+        for share in &shares[1..] {
+            all += share;
+        }
+        let formed = std::sync::Arc::new(EntryProducts { all, shares });
+        cache().entry(ci).or_insert(formed).clone()
     }
 }
 
@@ -1464,7 +1561,9 @@ impl Searcher<'_> {
         let mut x = design(&terms.iter().collect::<Vec<_>>(), obs.len());
         // The base's products with every variant, for this search's weights; the chosen terms'
         // rows are added at each step.
-        let products = self.pool.search_products(&x, w, held_out);
+        let products =
+            self.pool
+                .search_products(&self.base[self.pool.base_terms..], &x, w, held_out);
         // Variants whose columns a refinement changed (not the pool's: no products).
         let mut refined: std::collections::HashSet<(usize, usize)> = Default::default();
 

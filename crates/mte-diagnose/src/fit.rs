@@ -320,8 +320,7 @@ fn pinv_psd(m: DMat) -> DMat {
     // its ∞-norm, which bounds 1/λ_min, shows every eigenvalue above 1e-6 × the largest
     // diagonal — far from the tolerance, where the two routes agree to rounding.
     let top_diag = m.diagonal().max();
-    if let Some(chol) = m.clone().cholesky() {
-        let inv = chol.inverse();
+    if let Some(inv) = mte_linalg::lstsq::spd_inverse(&m) {
         let norm = inv
             .row_iter()
             .map(|r| r.iter().map(|v| v.abs()).sum::<f64>())

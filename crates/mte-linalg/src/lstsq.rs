@@ -467,6 +467,57 @@ pub fn qr_r(a: &DMat) -> DMat {
     DMat::from_fn(size, n, |i, j| if i <= j { qr[(i, j)] } else { 0.0 })
 }
 
+/// The inverse of a symmetric positive definite matrix by its Cholesky factor (faer's blocked
+/// factorisation and triangular inverse, sequential: the same bits whatever the thread count);
+/// `None` when a pivot is not positive (not positive definite to working precision). Only the
+/// lower triangle of `a` is read.
+///
+/// # Example
+/// ```
+/// use mte_linalg::bridge::DMat;
+/// let a = DMat::from_row_slice(2, 2, &[4.0, 2.0, 2.0, 3.0]);
+/// let inv = mte_linalg::lstsq::spd_inverse(&a).unwrap();
+/// assert!((&a * &inv - DMat::identity(2, 2)).norm() < 1e-14);
+/// assert!(mte_linalg::lstsq::spd_inverse(&DMat::from_row_slice(1, 1, &[-1.0])).is_none());
+/// ```
+pub fn spd_inverse(a: &DMat) -> Option<DMat> {
+    use faer::dyn_stack::{MemBuffer, MemStack};
+    use faer::linalg::cholesky::llt::{factor, inverse};
+    let n = a.nrows();
+    assert_eq!(n, a.ncols(), "spd_inverse: a square matrix");
+    let mut l = a.clone();
+    let factored = factor::cholesky_in_place(
+        as_faer_mut(&mut l),
+        Default::default(),
+        Par::Seq,
+        MemStack::new(&mut MemBuffer::new(
+            factor::cholesky_in_place_scratch::<f64>(n, Par::Seq, Default::default()),
+        )),
+        Default::default(),
+    );
+    let mut inv = DMat::zeros(n, n);
+    if factored.is_ok() {
+        inverse::inverse(
+            as_faer_mut(&mut inv),
+            as_faer(&l),
+            Par::Seq,
+            MemStack::new(&mut MemBuffer::new(inverse::inverse_scratch::<f64>(
+                n,
+                Par::Seq,
+            ))),
+        );
+    }
+    clean_vector_state();
+    factored.ok()?;
+    // The lower triangle holds the inverse: mirror it.
+    for j in 0..n {
+        for i in 0..j {
+            inv[(i, j)] = inv[(j, i)];
+        }
+    }
+    Some(inv)
+}
+
 /// Minimum-norm least squares `x = A⁺ b` (SVD): of all minimisers of ‖A x − b‖ the one with the
 /// smallest ‖x‖. Works for any shape and rank.
 ///
