@@ -218,7 +218,19 @@ pub(crate) fn streamed_r(n: usize, m: usize, rows: &dyn Fn(usize, usize) -> DMat
 
 /// Rows of `m` selected by `rows`.
 pub(crate) fn select_rows(m: &DMat, rows: &[usize]) -> DMat {
-    DMat::from_fn(rows.len(), m.ncols(), |i, j| m[(rows[i], j)])
+    let mut data = Vec::with_capacity(rows.len() * m.ncols());
+    gather_rows(m, rows, &mut data);
+    DMat::from_vec(rows.len(), m.ncols(), data)
+}
+
+/// Appends the rows `rows` of `m`, column by column (column-major), to `data`.
+fn gather_rows(m: &DMat, rows: &[usize], data: &mut Vec<f64>) {
+    if m.nrows() == 0 {
+        return;
+    }
+    for column in m.as_slice().chunks_exact(m.nrows()) {
+        data.extend(rows.iter().map(|&i| column[i]));
+    }
 }
 
 pub(crate) fn select(v: &DVec, rows: &[usize]) -> DVec {
@@ -1134,15 +1146,11 @@ fn in_batches<'a>(
             batch.push(c);
             next += 1;
         }
-        let mut side_by_side = DMat::zeros(rows, width);
-        let mut at = 0;
+        let mut data = Vec::with_capacity(rows * width);
         for c in &batch {
-            side_by_side
-                .columns_mut(at, c.ncols())
-                .copy_from(c.as_ref());
-            at += c.ncols();
+            data.extend_from_slice(c.as_slice());
         }
-        each(&batch, side_by_side);
+        each(&batch, DMat::from_vec(rows, width, data));
     }
 }
 
@@ -1238,18 +1246,16 @@ pub(crate) fn weighted_products(
     let parts: Vec<DMat> = batches
         .par_iter()
         .map(|&(a, b)| {
+            // The batch's columns side by side (column-major), copied once.
             let width: usize = column_blocks[a..b].iter().map(|c| c.ncols()).sum();
-            let mut c = DMat::zeros(xs.nrows(), width);
-            let mut at = 0;
+            let mut data = Vec::with_capacity(xs.nrows() * width);
             for block in &column_blocks[a..b] {
-                let k = block.ncols();
                 match rows {
-                    Some(rows) => c.columns_mut(at, k).copy_from(&select_rows(block, rows)),
-                    None => c.columns_mut(at, k).copy_from(*block),
+                    Some(rows) => gather_rows(block, rows, &mut data),
+                    None => data.extend_from_slice(block.as_slice()),
                 }
-                at += k;
             }
-            tr_mul(&xs, &c)
+            tr_mul(&xs, &DMat::from_vec(xs.nrows(), width, data))
         })
         .collect();
     let total: usize = parts.iter().map(DMat::ncols).sum();
