@@ -23,22 +23,35 @@ pub(crate) fn legendre_columns(values: &[f64], degrees: std::ops::RangeInclusive
         return DMat::zeros(n, 0);
     }
     let max_degree = degrees.iter().copied().max().unwrap_or(0);
-    DMat::from_fn(n, degrees.len(), |i, j| {
-        let u = 2.0 * (values[i] - lo) / (hi - lo) - 1.0;
-        legendre(max_degree, u)[degrees[j]]
-    })
+    // The recursion once per value (every degree of a row from one pass).
+    let mut m = DMat::zeros(n, degrees.len());
+    let mut p = Vec::with_capacity(max_degree + 2);
+    for (i, v) in values.iter().enumerate() {
+        legendre_into(max_degree, 2.0 * (v - lo) / (hi - lo) - 1.0, &mut p);
+        for (j, &d) in degrees.iter().enumerate() {
+            m[(i, j)] = p[d];
+        }
+    }
+    m
 }
 
 /// P_0 … P_n at u by Bonnet's recursion.
 pub(crate) fn legendre(n: usize, u: f64) -> Vec<f64> {
-    let mut p = vec![1.0, u];
+    let mut p = Vec::with_capacity(n + 2);
+    legendre_into(n, u, &mut p);
+    p
+}
+
+/// [`legendre`] into `p` (cleared first).
+fn legendre_into(n: usize, u: f64, p: &mut Vec<f64>) {
+    p.clear();
+    p.extend([1.0, u]);
     for k in 1..n {
         let k = k as f64;
         let next = ((2.0 * k + 1.0) * u * p[k as usize] - k * p[k as usize - 1]) / (k + 1.0);
         p.push(next);
     }
     p.truncate(n + 1);
-    p
 }
 
 /// `sin(2π v / period)` and `cos(2π v / period)`.
