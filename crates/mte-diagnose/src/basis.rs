@@ -35,14 +35,7 @@ pub(crate) fn legendre_columns(values: &[f64], degrees: std::ops::RangeInclusive
     m
 }
 
-/// P_0 … P_n at u by Bonnet's recursion.
-pub(crate) fn legendre(n: usize, u: f64) -> Vec<f64> {
-    let mut p = Vec::with_capacity(n + 2);
-    legendre_into(n, u, &mut p);
-    p
-}
-
-/// [`legendre`] into `p` (cleared first).
+/// P_0 … P_n at u by Bonnet's recursion, into `p` (cleared first).
 fn legendre_into(n: usize, u: f64, p: &mut Vec<f64>) {
     p.clear();
     p.extend([1.0, u]);
@@ -423,7 +416,8 @@ mod tests {
     #[test]
     fn legendre_matches_closed_forms() {
         for &u in &[-1.0, -0.3, 0.0, 0.7, 1.0] {
-            let p = legendre(3, u);
+            let mut p = Vec::new();
+            legendre_into(3, u, &mut p);
             assert!((p[2] - 0.5 * (3.0 * u * u - 1.0)).abs() < 1e-15);
             assert!((p[3] - 0.5 * (5.0 * u * u * u - 3.0 * u)).abs() < 1e-15);
         }

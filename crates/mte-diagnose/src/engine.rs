@@ -14,7 +14,8 @@ use crate::candidate::{Candidate, Role};
 use crate::data::Observations;
 use crate::fit::{
     Directions, Folds, Increment, Projector, SEPARABILITY_TOLERANCE, Solution, block_grams, design,
-    max_abs, rms, separable_columns, solve, tr_mul, weighted_products, whitened_r, whitening,
+    max_abs, rms, separable_columns, solve, tr_mul, weighted_products, weighted_products_by_rows,
+    whitened_r, whitening,
 };
 use crate::structure::{StructureTest, structure_tests};
 use crate::term::{Estimate, Family, Quantity, Summary, Term};
@@ -1196,14 +1197,13 @@ impl Pool {
             offsets,
             products: Products::default(),
             fold_shares: Vec::new(),
-            w2: DVec::zeros(0),
+            w2: w.component_mul(w),
             base_terms: base.len(),
             outer: outer.to_vec(),
             completion_products: Default::default(),
         };
         // The outer folds' test rows partition the observations: the products are formed per
         // fold (a fold's search subtracts its own share) and summed.
-        let w2 = w.component_mul(w);
         let mut group = vec![0; n];
         for (k, rows) in outer.iter().enumerate() {
             for &i in rows {
@@ -1211,20 +1211,17 @@ impl Pool {
             }
         }
         let blocks = pool.column_blocks();
-        let grams = block_grams(&blocks, &w2, &group, outer.len().max(1));
+        let grams = block_grams(&blocks, &pool.w2, &group, outer.len().max(1));
         let p0 = x_base.ncols();
         let mut xy = x_base.resize_horizontally(p0 + 1, 0.0);
         xy.set_column(p0, &obs.values);
         let shares: Vec<Products> = grams
             .into_iter()
-            .enumerate()
-            .map(|(k, gram)| {
-                let a = weighted_products(&xy, &w2, outer.get(k).map(Vec::as_slice), &blocks);
-                Products {
-                    x: a.rows(0, p0).into_owned(),
-                    y: a.row(p0).transpose(),
-                    gram: pool.per_variant(gram),
-                }
+            .zip(pool.fold_products(&xy))
+            .map(|(gram, a)| Products {
+                x: a.rows(0, p0).into_owned(),
+                y: a.row(p0).transpose(),
+                gram: pool.per_variant(gram),
             })
             .collect();
         let mut all = shares[0].clone();
@@ -1235,8 +1232,18 @@ impl Pool {
         if shares.len() > 1 {
             pool.fold_shares = shares;
         }
-        pool.w2 = w2;
         pool
+    }
+
+    /// `xᵀ W² C` with every variant's columns `C`, per outer fold's test rows (one share: all
+    /// rows when there are no outer folds).
+    fn fold_products(&self, x: &DMat) -> Vec<DMat> {
+        let blocks = self.column_blocks();
+        if self.outer.is_empty() {
+            vec![weighted_products(x, &self.w2, &blocks)]
+        } else {
+            weighted_products_by_rows(x, &self.w2, &self.outer, &blocks)
+        }
     }
 
     /// Every variant's columns, in pool order.
@@ -1262,7 +1269,7 @@ impl Pool {
     fn model_products(&self, fixed: &DMat, x: &DMat, w: &DVec) -> DMat {
         let p0 = fixed.nrows();
         let extra = x.columns(p0, x.ncols() - p0).into_owned();
-        let e = weighted_products(&extra, &w.component_mul(w), None, &self.column_blocks());
+        let e = weighted_products(&extra, &w.component_mul(w), &self.column_blocks());
         let mut out = DMat::zeros(x.ncols(), fixed.ncols());
         out.rows_mut(0, p0).copy_from(fixed);
         out.rows_mut(p0, e.nrows()).copy_from(&e);
@@ -1295,7 +1302,6 @@ impl Pool {
                     rows.push(weighted_products(
                         &c,
                         &w.component_mul(w),
-                        None,
                         &self.column_blocks(),
                     ));
                 }
@@ -1339,16 +1345,7 @@ impl Pool {
         if let Some(p) = cache().get(&ci) {
             return p.clone();
         }
-        let c = &self.variants[ci][0].columns;
-        let blocks = self.column_blocks();
-        let shares: Vec<DMat> = if self.outer.is_empty() {
-            vec![weighted_products(c, &self.w2, None, &blocks)]
-        } else {
-            self.outer
-                .iter()
-                .map(|rows| weighted_products(c, &self.w2, Some(rows), &blocks))
-                .collect()
-        };
+        let shares = self.fold_products(&self.variants[ci][0].columns);
         // Summed in fold order, as the pool's own products are.
         let mut all = shares[0].clone();
         for share in &shares[1..] {

@@ -1187,33 +1187,16 @@ pub(crate) fn block_grams(
         .collect()
 }
 
-/// `xᵀ diag(w2) c` over the observations `rows` (`None`: all) for the candidates' columns `c`
-/// (given by `column_blocks`, each block's columns side by side in order): p × (total columns),
-/// one blocked product per batch of about [`BATCH_COLUMNS`] columns, batches in parallel (the
+/// `xᵀ diag(w2) c` over all observations for the candidates' columns `c` (given by
+/// `column_blocks`, each block's columns side by side in order): p × (total columns), one
+/// blocked product per batch of about [`BATCH_COLUMNS`] columns, batches in parallel (the
 /// result does not depend on the number of threads).
-pub(crate) fn weighted_products(
-    x: &DMat,
-    w2: &DVec,
-    rows: Option<&[usize]>,
-    column_blocks: &[&DMat],
-) -> DMat {
-    let xs = match rows {
-        Some(rows) => {
-            let mut xs = select_rows(x, rows);
-            for (k, &i) in rows.iter().enumerate() {
-                xs.row_mut(k).scale_mut(w2[i]);
-            }
-            xs
-        }
-        None => {
-            let mut xs = x.clone();
-            for (i, v) in w2.iter().enumerate() {
-                xs.row_mut(i).scale_mut(*v);
-            }
-            xs
-        }
-    };
-    if rows.is_none() && x.ncols() <= NARROW_PRODUCT {
+pub(crate) fn weighted_products(x: &DMat, w2: &DVec, column_blocks: &[&DMat]) -> DMat {
+    let mut xs = x.clone();
+    for (i, v) in w2.iter().enumerate() {
+        xs.row_mut(i).scale_mut(*v);
+    }
+    if x.ncols() <= NARROW_PRODUCT {
         // A few columns (the terms a search step adds): each block's product read in place —
         // the cost is reading the candidates once, which a copy into batches would double.
         let total: usize = column_blocks.iter().map(|c| c.ncols()).sum();
@@ -1229,6 +1212,49 @@ pub(crate) fn weighted_products(
         }
         return out;
     }
+    let all: Vec<usize> = (0..x.nrows()).collect();
+    batched_products(&[xs], &[all], column_blocks, |block, data| {
+        data.extend_from_slice(block.as_slice())
+    })
+    .pop()
+    .expect("one group")
+}
+
+/// [`weighted_products`] over each group of observations `groups` (disjoint rows, e.g. the
+/// outer folds' test rows): one product per group, in one pass over the candidates — each
+/// batch's rows are gathered group after group, and each group's product reads its own rows.
+pub(crate) fn weighted_products_by_rows(
+    x: &DMat,
+    w2: &DVec,
+    groups: &[Vec<usize>],
+    column_blocks: &[&DMat],
+) -> Vec<DMat> {
+    let xs: Vec<DMat> = groups
+        .iter()
+        .map(|rows| {
+            let mut xs = select_rows(x, rows);
+            for (k, &i) in rows.iter().enumerate() {
+                xs.row_mut(k).scale_mut(w2[i]);
+            }
+            xs
+        })
+        .collect();
+    let order = groups.concat();
+    batched_products(&xs, groups, column_blocks, |block, data| {
+        gather_rows(block, &order, data)
+    })
+}
+
+/// `xs[g]ᵀ` times the rows of group `g` of the candidates' columns, for every group, batch by
+/// batch: `fill(block, data)` appends a block's rows (the groups' rows one group after the
+/// other, column-major) to the batch's buffer.
+fn batched_products(
+    xs: &[DMat],
+    groups: &[Vec<usize>],
+    column_blocks: &[&DMat],
+    fill: impl Fn(&DMat, &mut Vec<f64>) + Sync,
+) -> Vec<DMat> {
+    let rows: usize = groups.iter().map(Vec::len).sum();
     // Batches of whole blocks.
     let mut batches: Vec<(usize, usize)> = Vec::new(); // (first block, end block)
     let mut start = 0;
@@ -1243,29 +1269,39 @@ pub(crate) fn weighted_products(
         start = end;
     }
     use rayon::prelude::*;
-    let parts: Vec<DMat> = batches
+    let parts: Vec<Vec<DMat>> = batches
         .par_iter()
         .map(|&(a, b)| {
             // The batch's columns side by side (column-major), copied once.
             let width: usize = column_blocks[a..b].iter().map(|c| c.ncols()).sum();
-            let mut data = Vec::with_capacity(xs.nrows() * width);
+            let mut data = Vec::with_capacity(rows * width);
             for block in &column_blocks[a..b] {
-                match rows {
-                    Some(rows) => gather_rows(block, rows, &mut data),
-                    None => data.extend_from_slice(block.as_slice()),
-                }
+                fill(block, &mut data);
             }
-            tr_mul(&xs, &DMat::from_vec(xs.nrows(), width, data))
+            let c = DMat::from_vec(rows, width, data);
+            let mut at = 0;
+            xs.iter()
+                .map(|xs| {
+                    let part =
+                        product(as_faer(xs).transpose(), as_faer(&c).subrows(at, xs.nrows()));
+                    at += xs.nrows();
+                    part
+                })
+                .collect()
         })
         .collect();
-    let total: usize = parts.iter().map(DMat::ncols).sum();
-    let mut out = DMat::zeros(x.ncols(), total);
-    let mut at = 0;
-    for part in parts {
-        out.columns_mut(at, part.ncols()).copy_from(&part);
-        at += part.ncols();
-    }
-    out
+    let total: usize = parts.iter().map(|p| p[0].ncols()).sum();
+    (0..xs.len())
+        .map(|g| {
+            let mut out = DMat::zeros(xs[g].ncols(), total);
+            let mut at = 0;
+            for part in &parts {
+                out.columns_mut(at, part[g].ncols()).copy_from(&part[g]);
+                at += part[g].ncols();
+            }
+            out
+        })
+        .collect()
 }
 
 /// `q` (n × r, columns spanning what remains of an orthonormal basis after some rows were
@@ -1516,18 +1552,12 @@ mod tests {
         let c = crate::basis::sin_cos_columns(&v, periods[1]);
         let w2 = w.component_mul(&w);
         let gram = &block_grams(&[&c], &w2, &vec![0; n], 1)[0][0];
-        let cy = weighted_products(
-            &DMat::from_column_slice(n, 1, y.as_slice()),
-            &w2,
-            None,
-            &[&c],
-        )
-        .row(0)
-        .transpose();
+        let cy = weighted_products(&DMat::from_column_slice(n, 1, y.as_slice()), &w2, &[&c])
+            .row(0)
+            .transpose();
         let a = fit.basis_products(&weighted_products(
             &x.columns(0, 4).into_owned(),
             &w2,
-            None,
             &[&c],
         ));
         let from_products = fit.increment_from_products(gram, cy, a.as_view(), &fit.basis_of(&y));
