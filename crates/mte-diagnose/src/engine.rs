@@ -1939,21 +1939,14 @@ impl Searcher<'_> {
                 let b = if directions.ncols() == 0 {
                     DMat::zeros(0, width)
                 } else {
-                    let wc = DMat::from_iterator(
-                        obs.len(),
-                        width,
-                        chunk.iter().flat_map(|&(ci, vi, _)| {
-                            let c = &term_of(ci, vi).columns;
-                            let (n, data) = (c.nrows(), c.as_slice());
-                            (0..c.ncols()).flat_map(move |j| {
-                                data[j * n..(j + 1) * n]
-                                    .iter()
-                                    .zip(w.iter())
-                                    .map(|(c, w)| c * w)
-                            })
-                        }),
-                    );
-                    tr_mul(&directions, &wc)
+                    let mut data = Vec::with_capacity(obs.len() * width);
+                    for &(ci, vi, _) in chunk {
+                        let c = &term_of(ci, vi).columns;
+                        for column in c.as_slice().chunks_exact(c.nrows().max(1)) {
+                            data.extend(column.iter().zip(w.iter()).map(|(c, w)| c * w));
+                        }
+                    }
+                    tr_mul(&directions, &DMat::from_vec(obs.len(), width, data))
                 };
                 let mut at = 0;
                 chunk
