@@ -697,8 +697,8 @@ fn conclude(
     let mut not_separable = search.not_separable;
     let mut rests_on_orders: Vec<String> = Vec::new();
     let (terms, x, sol, fit, extended, hyper_u, extended_parameters) = loop {
-        let terms = searcher.with(&chosen, None);
-        let (x, fit) = searcher.fit_of(&base_fit, &terms);
+        let terms: Vec<Term> = searcher.with(&chosen, None).into_iter().cloned().collect();
+        let (x, fit) = searcher.fit_of(&base_fit, &terms.iter().collect::<Vec<_>>());
         let sol = solve(&x, &obs.values, w);
         let cv = fit.fold_fits(&folds, &x, &obs.values).residuals();
         let extended = quality(obs, &sol, &cv);
@@ -714,7 +714,11 @@ fn conclude(
         let widening = if causes.is_empty() {
             Vec::new()
         } else {
-            order_widening(&base_fit, &with_next().2, causes)
+            order_widening(
+                &base_fit,
+                &with_next().2,
+                &causes.iter().collect::<Vec<_>>(),
+            )
         };
         for (k, widening) in widening.into_iter().enumerate() {
             let width = causes[k].width();
@@ -2099,7 +2103,7 @@ impl Searcher<'_> {
             let others = std::cell::OnceCell::new();
             let rss_with = |t: &Term| {
                 let (rss, projector) = others.get_or_init(|| {
-                    let terms: Vec<Term> = self
+                    let terms: Vec<&Term> = self
                         .base
                         .iter()
                         .chain(
@@ -2109,7 +2113,6 @@ impl Searcher<'_> {
                                 .filter(|(k, _)| *k != j)
                                 .map(|(_, c)| &c.term),
                         )
-                        .cloned()
                         .collect();
                     let projector = self.fit_of(base_fit, &terms).1;
                     (projector.rss_w(), projector)
@@ -2156,8 +2159,8 @@ impl Searcher<'_> {
     }
 
     /// The design of `terms` (the base's, then others) and its fit, from the base's fit.
-    fn fit_of(&self, base_fit: &Projector, terms: &[Term]) -> (DMat, Projector) {
-        let x = design(&terms.iter().collect::<Vec<_>>(), self.obs.len());
+    fn fit_of(&self, base_fit: &Projector, terms: &[&Term]) -> (DMat, Projector) {
+        let x = design(terms, self.obs.len());
         let fit = base_fit.extended_to(&x);
         (x, fit)
     }
@@ -2194,16 +2197,16 @@ impl Searcher<'_> {
     }
 
     /// Base terms and chosen terms, without the chosen term `skip` and those that build on it.
-    fn with(&self, chosen: &[Chosen], skip: Option<usize>) -> Vec<Term> {
+    fn with<'c>(&'c self, chosen: &'c [Chosen], skip: Option<usize>) -> Vec<&'c Term> {
         let skipped = skip.map(|j| chosen[j].term.name.as_str());
-        let mut t = self.base.to_vec();
+        let mut t: Vec<&Term> = self.base.iter().collect();
         for (k, c) in chosen.iter().enumerate() {
             if Some(k) == skip
                 || (skipped.is_some() && self.chosen_candidate(c).requires() == skipped)
             {
                 continue;
             }
-            t.push(c.term.clone());
+            t.push(&c.term);
         }
         t
     }
@@ -2309,7 +2312,8 @@ impl Searcher<'_> {
                 };
                 // As the final model does, the causes that rest on the base's orders alone leave.
                 let mut chosen = found.chosen;
-                let (x_base, completed_fit) = searcher.fit_of(&fold_fit, &completed);
+                let (x_base, completed_fit) =
+                    searcher.fit_of(&fold_fit, &completed.iter().collect::<Vec<_>>());
                 let (x, fit) = searcher.drop_resting_on_orders(&mut chosen, &completed_fit);
                 let held_out_residuals = |x: &DMat, fit: &Projector| -> Vec<f64> {
                     let coef = fit.coefficients(&obs.values);
@@ -2937,8 +2941,7 @@ fn period_modes(
 fn gauss_newton_hyper(searcher: &Searcher<'_>, chosen: &mut [Chosen], w: &DVec) {
     let n = searcher.obs.len();
     let rss_of = |chosen: &[Chosen]| {
-        let terms = searcher.with(chosen, None);
-        let x = design(&terms.iter().collect::<Vec<_>>(), n);
+        let x = design(&searcher.with(chosen, None), n);
         let sol = solve(&x, &searcher.obs.values, w);
         (x, sol)
     };
@@ -3202,7 +3205,7 @@ fn next_orders(candidates: &[Box<dyn Candidate>], obs: &Observations, base: &[Te
 fn order_widening(
     narrow: &Projector,
     wide: &Projector,
-    causes: &[Term],
+    causes: &[&Term],
 ) -> Vec<Option<(DMat, DMat)>> {
     causes
         .iter()
@@ -3211,7 +3214,7 @@ fn order_widening(
             let others: Vec<&Term> = causes
                 .iter()
                 .enumerate()
-                .filter_map(|(j, o)| (j != k).then_some(o))
+                .filter_map(|(j, o)| (j != k).then_some(*o))
                 .collect();
             let xo = design(&others, t.columns.nrows());
             let (narrow, wide) = (narrow.extended(&xo), wide.extended(&xo));
