@@ -496,20 +496,10 @@ pub fn diagnose(
     // A long record is searched on an evenly thinned copy; what it finds is fitted to all.
     let thinned =
         (n > params.search_rows).then(|| thin_rows(&obs.acquisition_order(), params.search_rows));
-    // The base's fit on all observations is the search's start unless the record is thinned.
-    let (base, base_not_separable, full_fit) =
-        separable_base(base, &obs.values, &w, thinned.is_none());
     let base_width: usize = base.iter().map(Term::width).sum();
-    let needed = base_width + 2 * params.folds.max(params.outer_folds) + 2;
-    if n < needed {
-        return Err(DiagnoseError::TooFewObservations {
-            observations: n,
-            needed,
-        });
-    }
     let n_search = thinned.as_ref().map_or(n, Vec::len);
     // Every variant's design is kept for the search: refuse before allocating what the machine
-    // cannot hold.
+    // cannot hold (the base as given: its separable part is no wider).
     let columns: usize = candidates.iter().map(|c| c.columns(obs)).sum();
     let needed_gb = ((n_search * columns) as f64 + (n * 4 * base_width) as f64) * 8.0 / 1e9;
     if needed_gb > params.max_memory_gb {
@@ -523,17 +513,34 @@ pub fn diagnose(
     let thin = thinned.as_ref().map(|rows| {
         (
             obs.select(rows),
-            base.iter().map(|t| t.select_rows(rows)).collect::<Vec<_>>(),
             candidates
                 .iter()
                 .map(|c| c.on_rows(obs, rows))
                 .collect::<Vec<_>>(),
         )
     });
-    let (obs_s, base_s, candidates_s) = match &thin {
-        Some((o, b, c)) => (o, &b[..], &c[..]),
-        None => (obs, &base[..], candidates),
+    let (obs_s, candidates_s) = match &thin {
+        Some((o, c)) => (o, &c[..]),
+        None => (obs, candidates),
     };
+    // The base's fit on all observations is the search's start unless the record is thinned.
+    // The candidates' variants do not depend on the base: built meanwhile.
+    let ((base, base_not_separable, full_fit), built) = rayon::join(
+        || separable_base(base, &obs.values, &w, thinned.is_none()),
+        || Pool::variants_of(obs_s, candidates_s),
+    );
+    let base_width: usize = base.iter().map(Term::width).sum();
+    let needed = base_width + 2 * params.folds.max(params.outer_folds) + 2;
+    if n < needed {
+        return Err(DiagnoseError::TooFewObservations {
+            observations: n,
+            needed,
+        });
+    }
+    let base_thinned = thinned
+        .as_ref()
+        .map(|rows| base.iter().map(|t| t.select_rows(rows)).collect::<Vec<_>>());
+    let base_s = base_thinned.as_deref().unwrap_or(&base);
     let w_s = whitening(obs_s);
     let x_base = design(&base_s.iter().collect::<Vec<_>>(), n_search);
     // The base's fit on the searched observations: the full search's start, and the outer
@@ -553,7 +560,7 @@ pub fn diagnose(
     });
     let pool = Pool::new(
         obs_s,
-        candidates_s,
+        built,
         base_s,
         x_base,
         &w_s,
@@ -1142,23 +1149,12 @@ struct Products {
 }
 
 impl Pool {
-    /// The pool of `candidates` on `obs`, with the products of the base's design `x_base`
-    /// and the observations (weights `w`) with every variant, as the sum of the shares of the
-    /// outer folds' test rows `outer` (none: of all rows).
-    fn new(
-        obs: &Observations,
-        candidates: &[Box<dyn Candidate>],
-        base: &[Term],
-        x_base: DMat,
-        w: &DVec,
-        outer: &[Vec<usize>],
-    ) -> Pool {
+    /// The variants of `candidates` on `obs` that a pool holds (none for a probe), by
+    /// candidate. Building them (a scan's columns for every period) is independent per
+    /// candidate; collected in order, so the pool is the same for any thread count.
+    fn variants_of(obs: &Observations, candidates: &[Box<dyn Candidate>]) -> Vec<Vec<Term>> {
         let n = obs.len();
-        let mut variants = Vec::new();
-        let mut source = Vec::new();
-        // Building the variants (a scan's columns for every period) is independent per
-        // candidate; collected in order, so the pool is the same for any thread count.
-        let built: Vec<Vec<Term>> = candidates
+        candidates
             .par_iter()
             .map(|c| {
                 if c.role() == Role::Probe {
@@ -1169,7 +1165,24 @@ impl Pool {
                     .filter(|t| !t.is_invisible() && t.columns.nrows() == n)
                     .collect()
             })
-            .collect();
+            .collect()
+    }
+
+    /// The pool of the candidates' variants `built` ([`Pool::variants_of`]) on `obs`, with
+    /// the products of the base's design `x_base` and the observations (weights `w`) with
+    /// every variant, as the sum of the shares of the outer folds' test rows `outer` (none: of
+    /// all rows). A candidate named like a base term is the base's own: not in the pool.
+    fn new(
+        obs: &Observations,
+        built: Vec<Vec<Term>>,
+        base: &[Term],
+        x_base: DMat,
+        w: &DVec,
+        outer: &[Vec<usize>],
+    ) -> Pool {
+        let n = obs.len();
+        let mut variants = Vec::new();
+        let mut source = Vec::new();
         for (k, v) in built.into_iter().enumerate() {
             if v.is_empty() || base.iter().any(|b| b.name == v[0].name) {
                 continue;

@@ -476,7 +476,7 @@ fn beyond(q: &DMat, cw: DMat) -> Beyond {
     if r > 0 && k > 0 {
         for _ in 0..2 {
             let step = tr_mul(q, &perp);
-            perp -= product(as_faer(q), as_faer(&step));
+            perp -= mul(q, &step);
             a += step;
         }
     }
@@ -551,8 +551,8 @@ pub(crate) fn separable_columns(
     let before = kept.len;
     for _ in 0..2 {
         if let Some(q) = q.filter(|q| q.ncols() > 0) {
-            let coef = product(as_faer(q).transpose(), as_faer(&block));
-            block -= product(as_faer(q), as_faer(&coef));
+            let coef = tr_mul(q, &block);
+            block -= mul(q, &coef);
         }
         kept.project_out(before, &mut block);
     }
@@ -640,9 +640,36 @@ impl Increment {
     }
 }
 
-/// `aᵀ b`, the inner loop of every scan, by faer's blocked, vectorised product.
+/// `aᵀ b`, the inner loop of every scan, by faer's blocked, vectorised product — or, for a
+/// `b` of a few columns against a wide `a` (a refinement's trial columns against the model's
+/// basis), by dot products that read `a` once instead of packing it first.
 pub(crate) fn tr_mul(a: &DMat, b: &DMat) -> DMat {
+    if b.ncols() <= NARROW_PRODUCT && a.ncols() > 4 * b.ncols() {
+        let mut out = DMat::zeros(a.ncols(), b.ncols());
+        for (i, ai) in a.column_iter().enumerate() {
+            for (j, bj) in b.column_iter().enumerate() {
+                out[(i, j)] = ai.dot(&bj);
+            }
+        }
+        return out;
+    }
     product(as_faer(a).transpose(), as_faer(b))
+}
+
+/// `a b`, by faer's product — or, for a `b` of a few columns against a wide `a` (the model's
+/// basis times a candidate's coordinates in it), column by column of `a`, read once instead of
+/// packed first.
+pub(crate) fn mul(a: &DMat, b: &DMat) -> DMat {
+    if b.ncols() <= NARROW_PRODUCT && a.ncols() > 4 * b.ncols() {
+        let mut out = DMat::zeros(a.nrows(), b.ncols());
+        for (i, ai) in a.column_iter().enumerate() {
+            for j in 0..b.ncols() {
+                out.column_mut(j).axpy(b[(i, j)], &ai, 1.0);
+            }
+        }
+        return out;
+    }
+    product(as_faer(a), as_faer(b))
 }
 
 impl Projector {
@@ -867,7 +894,7 @@ impl Projector {
         }
         if self.q.ncols() > 0 {
             let coef = tr_mul(&self.q, &cw);
-            cw -= &self.q * coef;
+            cw -= mul(&self.q, &coef);
         }
         cw
     }
