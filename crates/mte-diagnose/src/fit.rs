@@ -644,16 +644,35 @@ impl Increment {
 /// `b` of a few columns against a wide `a` (a refinement's trial columns against the model's
 /// basis), by dot products that read `a` once instead of packing it first.
 pub(crate) fn tr_mul(a: &DMat, b: &DMat) -> DMat {
-    if b.ncols() <= NARROW_PRODUCT && a.ncols() > 4 * b.ncols() {
+    if b.ncols() <= NARROW_PRODUCT && a.ncols() > 4 * b.ncols() && a.nrows() > 0 {
         let mut out = DMat::zeros(a.ncols(), b.ncols());
-        for (i, ai) in a.column_iter().enumerate() {
-            for (j, bj) in b.column_iter().enumerate() {
-                out[(i, j)] = ai.dot(&bj);
+        let b_columns: Vec<&[f64]> = b.as_slice().chunks_exact(b.nrows()).collect();
+        for (i, ai) in a.as_slice().chunks_exact(a.nrows()).enumerate() {
+            for (j, bj) in b_columns.iter().enumerate() {
+                out[(i, j)] = dot(ai, bj);
             }
         }
         return out;
     }
     product(as_faer(a).transpose(), as_faer(b))
+}
+
+/// `xᵀ y` with eight partial sums (independent chains the processor can overlap).
+fn dot(x: &[f64], y: &[f64]) -> f64 {
+    let (xs, ys) = (x.chunks_exact(8), y.chunks_exact(8));
+    let tail: f64 = xs
+        .remainder()
+        .iter()
+        .zip(ys.remainder())
+        .map(|(a, b)| a * b)
+        .sum();
+    let mut acc = [0.0; 8];
+    for (a, b) in xs.zip(ys) {
+        for k in 0..8 {
+            acc[k] += a[k] * b[k];
+        }
+    }
+    ((acc[0] + acc[4]) + (acc[1] + acc[5])) + ((acc[2] + acc[6]) + (acc[3] + acc[7])) + tail
 }
 
 /// `a b`, by faer's product — or, for a `b` of a few columns against a wide `a` (the model's
