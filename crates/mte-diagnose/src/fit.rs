@@ -1212,14 +1212,21 @@ pub(crate) fn block_grams(
     let per_block: Vec<Vec<DMat>> = column_blocks
         .par_iter()
         .map(|c| {
-            let k = c.ncols();
+            let (n, k) = c.shape();
             let mut acc = vec![0.0; groups * k * k];
-            for (i, &g) in group.iter().enumerate() {
-                let at = g * k * k;
-                for a in 0..k {
-                    let ca = c[(i, a)] * w2[i];
-                    for b in a..k {
-                        acc[at + a * k + b] += ca * c[(i, b)];
+            // Column pair by column pair, each sum over the rows in order (as row by row).
+            let columns: Vec<&[f64]> = (0..k).map(|j| &c.as_slice()[j * n..(j + 1) * n]).collect();
+            let mut sums = vec![0.0; groups];
+            for a in 0..k {
+                for b in a..k {
+                    sums.fill(0.0);
+                    for (((&g, &ca), &cb), &w2) in
+                        group.iter().zip(columns[a]).zip(columns[b]).zip(w2.iter())
+                    {
+                        sums[g] += ca * w2 * cb;
+                    }
+                    for (g, s) in sums.iter().enumerate() {
+                        acc[g * k * k + a * k + b] = *s;
                     }
                 }
             }
