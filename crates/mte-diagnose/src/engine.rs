@@ -749,13 +749,26 @@ fn conclude(
         };
         // A cause the base's next orders would hold, or whose size they leave undetermined,
         // rests on the base's orders alone: the report lists it as not separable from them.
-        if undetermined.is_some() || z(&parameters(&terms, &sol.coef, &plain), k) >= 2.0 {
-            let others: Vec<&Term> = causes
-                .iter()
-                .enumerate()
-                .filter_map(|(j, t)| (j != k).then_some(t))
-                .collect();
-            let x_others = design(&others, n);
+        // (One the base and the other causes hold without those orders — two components of a
+        // periodic error drawn to one period — leaves as pruned.)
+        let others: Vec<&Term> = causes
+            .iter()
+            .enumerate()
+            .filter_map(|(j, t)| (j != k).then_some(t))
+            .collect();
+        let x_others = design(&others, n);
+        let held_by_model = || {
+            base_fit
+                .extended(&x_others)
+                .increment(&causes[k].columns)
+                .separability
+                < SEPARABILITY_TOLERANCE
+        };
+        let on_orders = match undetermined {
+            Some(_) => !held_by_model(),
+            None => z(&parameters(&terms, &sol.coef, &plain), k) >= 2.0,
+        };
+        if on_orders {
             let (next, x_next, base_and_next) = with_next();
             let model: Vec<Term> = base
                 .iter()

@@ -1455,6 +1455,7 @@ fn orthonormal_basis_and_map(a: &DMat) -> (DMat, DMat) {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use approx::assert_relative_eq;
 
     /// A smooth, deterministic design of `n` rows: a constant, Legendre-like powers and a sine,
     /// with one column a combination of two others (rank deficient).
@@ -1617,6 +1618,42 @@ mod tests {
         let direct = fit.increment(&c);
         assert_eq!(from_products.new_rank, direct.new_rank);
         assert!((from_products.delta_rss - direct.delta_rss).abs() < 1e-9 * direct.delta_rss);
+    }
+
+    #[test]
+    fn narrow_and_grouped_products_equal_faer_blocked_ones() {
+        let n = 301;
+        let (x, y, w) = problem(n);
+        let wide = DMat::from_fn(n, 40, |i, j| {
+            ((i * (j + 3)) % 17) as f64 - 8.0 + x[(i, j % 6)]
+        });
+        let narrow = DMat::from_fn(n, 3, |i, j| y[i] * (j as f64 + 1.0) - x[(i, 3)]);
+        let faer_tr = product(as_faer(&wide).transpose(), as_faer(&narrow));
+        assert_relative_eq!(tr_mul(&wide, &narrow), faer_tr, max_relative = 1e-12);
+        let coef = DMat::from_fn(40, 3, |i, j| (i as f64 - 2.0 * j as f64) / 7.0);
+        let faer_mul = product(as_faer(&wide), as_faer(&coef));
+        assert_relative_eq!(
+            mul(&wide, &coef),
+            faer_mul,
+            max_relative = 1e-12,
+            epsilon = 1e-12
+        );
+        // Per group of rows in one pass, as over each group's rows alone.
+        let w2 = w.component_mul(&w);
+        let blocks = [&narrow, &x];
+        let groups: Vec<Vec<usize>> = vec![
+            (0..n).filter(|i| i % 3 == 0).collect(),
+            (0..n).filter(|i| i % 3 != 0).collect(),
+        ];
+        let by_rows = weighted_products_by_rows(&wide, &w2, &groups, &blocks);
+        for (rows, got) in groups.iter().zip(&by_rows) {
+            let mut w2_rows = DVec::zeros(n);
+            for &i in rows {
+                w2_rows[i] = w2[i];
+            }
+            let expected = weighted_products(&wide, &w2_rows, &blocks);
+            assert_relative_eq!(*got, expected, max_relative = 1e-12, epsilon = 1e-9);
+        }
     }
 
     #[test]

@@ -546,3 +546,24 @@ fn constraints_fixing_everything_leave_no_free_unknowns() {
     assert_relative_eq!(fit.rss, 16.0 + 16.0, epsilon = 1e-12);
     assert!(fit.cofactor.amax() < 1e-15);
 }
+
+#[test]
+fn spd_inverse_equals_the_lu_inverse_past_the_blocked_size() {
+    // 150 × 150 takes faer's blocked, recursive factorisation (not the 2 × 2 of the doc
+    // example); the reference is nalgebra's LU inverse, an independent route.
+    let mut g = Gen(17);
+    let a = g.mat(400, 150);
+    let spd = a.transpose() * &a + DMat::identity(150, 150);
+    let inverse = spd_inverse(&spd).expect("positive definite");
+    let reference = spd.clone().try_inverse().expect("invertible");
+    assert_relative_eq!(inverse, reference, max_relative = 1e-10, epsilon = 1e-14);
+    assert_eq!(inverse, inverse.transpose(), "symmetric to the bit");
+    // Only the lower triangle is read.
+    let mut upper_junk = spd.clone();
+    upper_junk[(0, 149)] = 1e9;
+    assert_eq!(spd_inverse(&upper_junk), Some(inverse));
+    // Indefinite: no inverse.
+    let mut indefinite = spd;
+    indefinite[(75, 75)] = -1.0;
+    assert!(spd_inverse(&indefinite).is_none());
+}
