@@ -12,6 +12,22 @@ use xtask::studies::{self, Effect};
 /// Seed of these tests' datasets (the studies use others).
 const SEED: u64 = 2026;
 
+/// The diagnosis, with the default settings, of the dataset `spec` writes from `seed`.
+fn diagnosed(spec: &xtask::realistic::Spec, seed: u64) -> mte_diagnose::Diagnosis {
+    let dir = std::env::temp_dir().join(format!("mte-test-{}-{seed}", std::process::id()));
+    let truth = xtask::realistic::write_spec(spec, seed, &dir).unwrap();
+    let p = mte_diagnose::load(&truth.manifest).unwrap();
+    let d = mte_diagnose::diagnose(
+        &p.observations,
+        p.base,
+        &p.candidates,
+        &mte_diagnose::DiagnoseParams::default(),
+    )
+    .unwrap();
+    let _ = std::fs::remove_dir_all(&dir);
+    d
+}
+
 #[test]
 fn clean_realistic_machines_rarely_yield_a_discovery() {
     // At a 5 % false-discovery rate, 2 or more discoveries among 12 clean datasets happen with
@@ -136,21 +152,11 @@ fn an_error_of_two_axes_at_once_is_reported_as_unexplained_structure() {
 /// sentence is due: the positions cannot tell the two readings apart).
 #[test]
 fn harmonics_found_for_a_sawtooth_are_named_one_non_sinusoidal_error() {
-    use xtask::realistic::{Hidden, Spec, write_spec};
+    use xtask::realistic::{Hidden, Spec};
     // Whether a note calls components non-sinusoidal, and whether the first periodic finding
     // sits at the true period (within 2 u).
     let run = |hidden: Hidden, seed: u64, period_mm: f64| {
-        let dir = std::env::temp_dir().join(format!("mte-saw-{}-{seed}", std::process::id()));
-        let truth = write_spec(&Spec::new(Kind::Axis, &[hidden]), seed, &dir).unwrap();
-        let p = mte_diagnose::load(&truth.manifest).unwrap();
-        let d = mte_diagnose::diagnose(
-            &p.observations,
-            p.base,
-            &p.candidates,
-            &mte_diagnose::DiagnoseParams::default(),
-        )
-        .unwrap();
-        let _ = std::fs::remove_dir_all(&dir);
+        let d = diagnosed(&Spec::new(Kind::Axis, &[hidden]), seed);
         let at_true_period = d
             .findings
             .iter()
@@ -243,7 +249,7 @@ fn an_effect_the_base_orders_could_hold_is_sized_with_them_or_owned_up_to() {
 #[test]
 fn a_cause_the_other_causes_hold_is_not_said_to_rest_on_the_base_orders() {
     use rand::SeedableRng;
-    use xtask::realistic::{Spec, write_spec};
+    use xtask::realistic::Spec;
     // Dataset 179 of the studies' axis pitch coverage cell: its base runs up to EXX P10, the
     // highest order, so it has no next orders; in the final model its two periodic components
     // sit at one period, the first held by the base and the second. The first leaves — as a
@@ -253,17 +259,7 @@ fn a_cause_the_other_causes_hold_is_not_said_to_rest_on_the_base_orders() {
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed ^ 0x5eed_5eed_5eed_5eed);
     let mut spec = Spec::new(Kind::Axis, &[Effect::Pitch.hidden(2.0, &mut rng)]);
     spec.base_model = studies::user_model_lacking(Kind::Axis, Effect::Pitch);
-    let dir = std::env::temp_dir().join(format!("mte-held-{}", std::process::id()));
-    let truth = write_spec(&spec, seed, &dir).unwrap();
-    let p = mte_diagnose::load(&truth.manifest).unwrap();
-    let d = mte_diagnose::diagnose(
-        &p.observations,
-        p.base,
-        &p.candidates,
-        &mte_diagnose::DiagnoseParams::default(),
-    )
-    .unwrap();
-    let _ = std::fs::remove_dir_all(&dir);
+    let d = diagnosed(&spec, seed);
     let on_orders: Vec<&str> = d
         .not_separable
         .iter()
