@@ -167,6 +167,12 @@ pub fn run_one(spec: &Spec, index: usize, seed: u64, work: &Path) -> Record {
     }
 }
 
+/// The random stream of the spec's own draws (sizes, periods) for the dataset of generator
+/// seed `seed` ([`run_cell`]): separate from the generator's.
+pub fn spec_rng(seed: u64) -> ChaCha8Rng {
+    ChaCha8Rng::seed_from_u64(seed ^ 0x5eed_5eed_5eed_5eed)
+}
+
 /// Runs `n` datasets of the cell `cell` in parallel; `spec_for(index, rng)` builds each spec
 /// from a generator seeded for that dataset. Prints a progress line on stderr.
 pub fn run_cell(
@@ -181,9 +187,7 @@ pub fn run_cell(
         .into_par_iter()
         .map(|i| {
             let seed = dataset_seed(base_seed, cell, i);
-            // The spec's own draws (sizes, periods) use a stream separate from the generator's.
-            let mut rng = ChaCha8Rng::seed_from_u64(seed ^ 0x5eed_5eed_5eed_5eed);
-            let spec = spec_for(&mut rng);
+            let spec = spec_for(&mut spec_rng(seed));
             let r = run_one(&spec, i, seed, &work);
             let k = done.fetch_add(1, Ordering::Relaxed) + 1;
             eprint!("\r{cell}: {k}/{n}   ");

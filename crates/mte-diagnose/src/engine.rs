@@ -730,11 +730,11 @@ fn conclude(
         for (k, widening) in widening.into_iter().enumerate() {
             let width = causes[k].width();
             match widening {
-                Some((narrow, wide)) => {
+                Ok((narrow, wide)) => {
                     let mut block = cov.view_mut((at, at), (width, width));
                     block += (wide - narrow) * scale;
                 }
-                None => undetermined = undetermined.or(Some(k)),
+                Err(held) => undetermined = undetermined.or(Some((k, held))),
             }
             at += width;
         }
@@ -744,31 +744,24 @@ fn conclude(
             .map(|k| (k, z(&extended_parameters, k)))
             .filter(|(_, z)| *z < 2.0)
             .min_by(|a, b| a.1.total_cmp(&b.1));
-        let Some(k) = undetermined.or(weakest.map(|w| w.0)) else {
+        let Some(k) = undetermined.map(|u| u.0).or(weakest.map(|w| w.0)) else {
             break (terms, x, sol, fit, extended, hyper_u, extended_parameters);
         };
         // A cause the base's next orders would hold, or whose size they leave undetermined,
         // rests on the base's orders alone: the report lists it as not separable from them.
         // (One the base and the other causes hold without those orders — two components of a
         // periodic error drawn to one period — leaves as pruned.)
-        let others: Vec<&Term> = causes
-            .iter()
-            .enumerate()
-            .filter_map(|(j, t)| (j != k).then_some(t))
-            .collect();
-        let x_others = design(&others, n);
-        let held_by_model = || {
-            base_fit
-                .extended(&x_others)
-                .increment(&causes[k].columns)
-                .separability
-                < SEPARABILITY_TOLERANCE
-        };
         let on_orders = match undetermined {
-            Some(_) => !held_by_model(),
+            Some((_, held)) => held == Held::ByOrders,
             None => z(&parameters(&terms, &sol.coef, &plain), k) >= 2.0,
         };
         if on_orders {
+            let others: Vec<&Term> = causes
+                .iter()
+                .enumerate()
+                .filter_map(|(j, t)| (j != k).then_some(t))
+                .collect();
+            let x_others = design(&others, n);
             let (next, x_next, base_and_next) = with_next();
             let model: Vec<Term> = base
                 .iter()
@@ -3226,13 +3219,13 @@ fn next_orders(candidates: &[Box<dyn Candidate>], obs: &Observations, base: &[Te
 /// (fit `wide`). A cause is found against a base of finite orders; where the data
 /// separate it from the base only through those orders (an R-test's angular positioning of C
 /// against the linear axes' higher orders along the ball's circle), its size rests on them,
-/// and this says by how much. `None`: the wider model holds the cause (it is not separable
-/// from the base's next orders).
+/// and this says by how much. [`Held`]: the wider model holds the cause — the base and the
+/// other causes already (`ByModel`), or only with the next orders (`ByOrders`).
 fn order_widening(
     narrow: &Projector,
     wide: &Projector,
     causes: &[&Term],
-) -> Vec<Option<(DMat, DMat)>> {
+) -> Vec<std::result::Result<(DMat, DMat), Held>> {
     causes
         .iter()
         .enumerate()
@@ -3244,17 +3237,34 @@ fn order_widening(
                 .collect();
             let xo = design(&others, t.columns.nrows());
             let (narrow, wide) = (narrow.extended(&xo), wide.extended(&xo));
-            if wide.increment(&t.columns).separability < SEPARABILITY_TOLERANCE {
-                return None;
+            let holds =
+                |p: &Projector| p.increment(&t.columns).separability < SEPARABILITY_TOLERANCE;
+            // The narrow model is within the wide one: what it holds, the wide one holds too.
+            if holds(&wide) {
+                return Err(if holds(&narrow) {
+                    Held::ByModel
+                } else {
+                    Held::ByOrders
+                });
             }
             let gram = |p: &Projector| {
                 let r = p.residual_part(&t.columns);
                 r.tr_mul(&r)
             };
-            let inverse = |g: DMat| g.try_inverse();
-            Some((inverse(gram(&narrow))?, inverse(gram(&wide))?))
+            let inverse = |g: DMat| g.try_inverse().ok_or(Held::ByOrders);
+            Ok((inverse(gram(&narrow))?, inverse(gram(&wide))?))
         })
         .collect()
+}
+
+/// What holds a cause whose widening by the base's next orders is not defined
+/// ([`order_widening`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Held {
+    /// The base and the other causes, without the next orders.
+    ByModel,
+    /// The next orders.
+    ByOrders,
 }
 
 /// The base completion called `name` on all observations.

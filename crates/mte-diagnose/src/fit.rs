@@ -644,7 +644,7 @@ impl Increment {
 /// `b` of a few columns against a wide `a` (a refinement's trial columns against the model's
 /// basis), by dot products that read `a` once instead of packing it first.
 pub(crate) fn tr_mul(a: &DMat, b: &DMat) -> DMat {
-    if b.ncols() <= NARROW_PRODUCT && a.ncols() > 4 * b.ncols() && a.nrows() > 0 {
+    if read_in_place(a, b) {
         let mut out = DMat::zeros(a.ncols(), b.ncols());
         let b_columns: Vec<&[f64]> = b.as_slice().chunks_exact(b.nrows()).collect();
         for (i, ai) in a.as_slice().chunks_exact(a.nrows()).enumerate() {
@@ -655,6 +655,11 @@ pub(crate) fn tr_mul(a: &DMat, b: &DMat) -> DMat {
         return out;
     }
     product(as_faer(a).transpose(), as_faer(b))
+}
+
+/// Whether [`tr_mul`] and [`mul`] read `a` in place: `b` has a few columns against a wide `a`.
+fn read_in_place(a: &DMat, b: &DMat) -> bool {
+    b.ncols() <= NARROW_PRODUCT && a.ncols() > 4 * b.ncols() && a.nrows() > 0
 }
 
 /// `xᵀ y` with eight partial sums (independent chains the processor can overlap).
@@ -679,7 +684,7 @@ fn dot(x: &[f64], y: &[f64]) -> f64 {
 /// basis times a candidate's coordinates in it), column by column of `a`, read once instead of
 /// packed first.
 pub(crate) fn mul(a: &DMat, b: &DMat) -> DMat {
-    if b.ncols() <= NARROW_PRODUCT && a.ncols() > 4 * b.ncols() {
+    if read_in_place(a, b) {
         let mut out = DMat::zeros(a.nrows(), b.ncols());
         for (i, ai) in a.column_iter().enumerate() {
             for j in 0..b.ncols() {
@@ -1265,8 +1270,7 @@ pub(crate) fn weighted_products(x: &DMat, w2: &DVec, column_blocks: &[&DMat]) ->
         }
         return out;
     }
-    let all: Vec<usize> = (0..x.nrows()).collect();
-    batched_products(&[xs], &[all], column_blocks, |block, data| {
+    batched_products(&[xs], column_blocks, |block, data| {
         data.extend_from_slice(block.as_slice())
     })
     .pop()
@@ -1293,21 +1297,20 @@ pub(crate) fn weighted_products_by_rows(
         })
         .collect();
     let order = groups.concat();
-    batched_products(&xs, groups, column_blocks, |block, data| {
+    batched_products(&xs, column_blocks, |block, data| {
         gather_rows(block, &order, data)
     })
 }
 
-/// `xs[g]ᵀ` times the rows of group `g` of the candidates' columns, for every group, batch by
-/// batch: `fill(block, data)` appends a block's rows (the groups' rows one group after the
-/// other, column-major) to the batch's buffer.
+/// `xs[g]ᵀ` times the rows of group `g` of the candidates' columns (the groups' rows one group
+/// after the other, as many as `xs[g]` has), for every group, batch by batch: `fill(block,
+/// data)` appends a block's rows in that order, column-major, to the batch's buffer.
 fn batched_products(
     xs: &[DMat],
-    groups: &[Vec<usize>],
     column_blocks: &[&DMat],
     fill: impl Fn(&DMat, &mut Vec<f64>) + Sync,
 ) -> Vec<DMat> {
-    let rows: usize = groups.iter().map(Vec::len).sum();
+    let rows: usize = xs.iter().map(DMat::nrows).sum();
     // Batches of whole blocks.
     let mut batches: Vec<(usize, usize)> = Vec::new(); // (first block, end block)
     let mut start = 0;
