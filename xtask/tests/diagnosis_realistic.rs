@@ -247,12 +247,16 @@ fn an_effect_the_base_orders_could_hold_is_sized_with_them_or_owned_up_to() {
 }
 
 #[test]
-fn a_cause_the_other_causes_hold_is_not_said_to_rest_on_the_base_orders() {
+fn a_component_held_by_another_leaves_and_the_one_that_stays_is_found_again_alone() {
     use xtask::realistic::Spec;
-    // Dataset 179 of the studies' axis pitch coverage cell: its base runs up to EXX P10, the
-    // highest order, so it has no next orders; in the final model its two periodic components
-    // sit at one period, the first held by the base and the second. The first leaves — as a
-    // cause the others hold, not as one "resting on the orders" of an empty list.
+    // Dataset 179 of the studies' axis pitch coverage cell: 15 positions, a 29 mm pitch, a base
+    // completed up to EXX P10 (so it has no next orders). The search ends with two periodic
+    // components at periods that each hold part of the other on these positions; in the final
+    // model the base and one of them hold the other. Then the later one leaves — as a cause the
+    // others hold, not as one "resting on the orders" of an empty list — and the one that stays
+    // is the first component again, its period chosen anew without the other: before, the
+    // first left, the second stayed under its name "#2" at the period it took beside the
+    // first, other periods fitted better by Δχ² = 100, and the verdict was "unexplained".
     let (cell, index) = ("power-axis-Pitch-2", 179);
     let seed = studies::dataset_seed(1, cell, index);
     let mut spec = Spec::new(
@@ -261,22 +265,34 @@ fn a_cause_the_other_causes_hold_is_not_said_to_rest_on_the_base_orders() {
     );
     spec.base_model = studies::user_model_lacking(Kind::Axis, Effect::Pitch);
     let d = diagnosed(&spec, seed);
-    let on_orders: Vec<&str> = d
-        .not_separable
-        .iter()
-        .filter(|n| n.rests_on_orders)
-        .map(|n| n.name.as_str())
-        .collect();
-    // The situation this dataset is kept for: the first component left the final model.
+    let names: Vec<&str> = d.findings.iter().map(|f| f.name.as_str()).collect();
+    // The situation this dataset is kept for: a component left the final model.
     assert!(
-        d.pruned.iter().any(|p| p == "EXX periodic"),
-        "EXX periodic not pruned (the dataset no longer shows the case): {:?}",
+        d.pruned.iter().any(|p| p == "EXX periodic #2"),
+        "no component pruned (the dataset no longer shows the case): {:?}, findings {names:?}",
         d.pruned
+    );
+    assert_eq!(names, ["EXX periodic"], "notes {:?}", d.notes);
+    assert_eq!(d.verdict, mte_diagnose::Verdict::Explained, "{:?}", d.notes);
+    // No other period fits better than the one that stays (the ambiguity note's Δχ², relative
+    // to it, are not below zero beyond rounding).
+    let better: Vec<f64> = d
+        .notes
+        .iter()
+        .flat_map(|n| n.split("Δχ² = ").skip(1))
+        .filter_map(|s| s.split(',').next()?.parse::<f64>().ok())
+        .filter(|&dchi2| dchi2 < -1.0)
+        .collect();
+    assert!(
+        better.is_empty(),
+        "periods that fit better: {better:?}; {:?}",
+        d.notes
     );
     // With no next orders, nothing rests on them.
     assert!(
-        on_orders.is_empty() && d.notes.iter().all(|n| !n.contains("in the model ()")),
-        "a cause said to rest on no orders: {on_orders:?}; notes {:?}",
+        d.not_separable.iter().all(|n| !n.rests_on_orders)
+            && d.notes.iter().all(|n| !n.contains("in the model ()")),
+        "a cause said to rest on no orders: {:?}",
         d.notes
     );
 }

@@ -716,7 +716,7 @@ fn conclude(
         // order of every base error would add.
         let plain = cov.clone();
         let causes = &terms[base.len()..];
-        let mut undetermined = None;
+        let mut held = vec![None; causes.len()];
         let mut at = x0.ncols();
         let widening = if causes.is_empty() {
             Vec::new()
@@ -734,25 +734,21 @@ fn conclude(
                     let mut block = cov.view_mut((at, at), (width, width));
                     block += (wide - narrow) * scale;
                 }
-                Err(held) => undetermined = undetermined.or(Some((k, held))),
+                Err(h) => held[k] = Some(h),
             }
             at += width;
         }
         let extended_parameters = parameters(&terms, &sol.coef, &cov);
         let z = |p: &[ParameterEstimate], k: usize| largest_z(&p[base.len() + k].estimates);
-        let weakest = (0..chosen.len())
-            .map(|k| (k, z(&extended_parameters, k)))
-            .filter(|(_, z)| *z < 2.0)
-            .min_by(|a, b| a.1.total_cmp(&b.1));
-        let Some(k) = undetermined.map(|u| u.0).or(weakest.map(|w| w.0)) else {
+        let Some((k, held)) = leaving(&held, |k| z(&extended_parameters, k)) else {
             break (terms, x, sol, fit, extended, hyper_u, extended_parameters);
         };
         // A cause the base's next orders would hold, or whose size they leave undetermined,
         // rests on the base's orders alone: the report lists it as not separable from them.
         // (One the base and the other causes hold without those orders — two components of a
         // periodic error drawn to one period — leaves as pruned.)
-        let on_orders = match undetermined {
-            Some((_, held)) => held == Held::ByOrders,
+        let on_orders = match held {
+            Some(held) => held == Held::ByOrders,
             None => z(&parameters(&terms, &sol.coef, &plain), k) >= 2.0,
         };
         if on_orders {
@@ -786,7 +782,7 @@ fn conclude(
             });
             rests_on_orders.push(causes[k].name.clone());
         }
-        pruned.extend(searcher.remove(&mut chosen, k));
+        pruned.extend(searcher.remove(&mut chosen, k, &base_fit));
     };
     let finals = searcher.removal_p_values(&chosen, &base_fit, &fit);
     let mut findings: Vec<Finding> = chosen
@@ -2153,6 +2149,56 @@ impl Searcher<'_> {
         }
     }
 
+    /// Chooses the period or time constant of chosen term `j` again, over all its candidate's
+    /// variants and then refined, with the other chosen terms fitted, as the component it now is
+    /// (the components of its candidate that stay, in order of entry). After a cause it was
+    /// chosen and refined beside has left the model, the value it took there need not be the
+    /// data's best without it: two periodic components drawn to one period on sparse positions
+    /// each hold part of the other, and the one that stays must be found again alone.
+    fn rechoose(&self, chosen: &mut [Chosen], j: usize, base_fit: &Projector) {
+        let c = &chosen[j];
+        if hyper_of(&c.term.family, false).is_none() {
+            return;
+        }
+        let candidate = self.chosen_candidate(c);
+        let variants = candidate.variants(self.obs);
+        let component = chosen[..j]
+            .iter()
+            .filter(|o| o.candidate == c.candidate)
+            .count();
+        let others: Vec<&Term> = self
+            .base
+            .iter()
+            .chain(
+                chosen
+                    .iter()
+                    .enumerate()
+                    .filter(|(k, _)| *k != j)
+                    .map(|(_, o)| &o.term),
+            )
+            .collect();
+        let projector = self.fit_of(base_fit, &others).1;
+        let rss_with = |t: &Term| projector.rss_w() - projector.increment(&t.columns).delta_rss;
+        let free = |t: &Term| !near_a_component(self.obs, t, chosen, c.candidate, Some(j));
+        let increments =
+            projector.increments(variants.len(), |v| Cow::Borrowed(&variants[v].columns));
+        let Some(best) = (0..variants.len())
+            .filter(|&v| free(&variants[v]))
+            .max_by(|&a, &b| increments[a].delta_rss.total_cmp(&increments[b].delta_rss))
+        else {
+            return;
+        };
+        let term = candidate
+            .refine(best, &rss_with)
+            .filter(|r| free(r) && rss_with(r) < rss_with(&variants[best]))
+            .unwrap_or_else(|| variants[best].clone());
+        if rss_with(&term) >= rss_with(&c.term) && component == c.component {
+            return;
+        }
+        let c = &mut chosen[j];
+        (c.term, c.variant, c.component) = (nth_component(term, component), best, component);
+    }
+
     /// Backward pruning: every cause is re-tested in the complete model (F test of removing it,
     /// Bonferroni-adjusted as when it entered, and its cross-validated gain); the weakest that
     /// fails leaves, with the causes that build on it, until all pass. Returns the names removed.
@@ -2172,7 +2218,7 @@ impl Searcher<'_> {
                 }
             }
             let Some((j, _, _)) = weakest else { break };
-            pruned.extend(self.remove(chosen, j));
+            pruned.extend(self.remove(chosen, j, base_fit));
         }
         pruned
     }
@@ -2184,8 +2230,11 @@ impl Searcher<'_> {
         (x, fit)
     }
 
-    /// Removes chosen term `j` and what builds on it; returns their names, `j`'s first.
-    fn remove(&self, chosen: &mut Vec<Chosen>, j: usize) -> Vec<String> {
+    /// Removes chosen term `j` and what builds on it, and chooses the period or time constant of
+    /// each term that stays again without them ([`Searcher::rechoose`]); returns the names
+    /// removed, `j`'s first. `base_fit`: the fit of this searcher's base, or of a first part of
+    /// it.
+    fn remove(&self, chosen: &mut Vec<Chosen>, j: usize, base_fit: &Projector) -> Vec<String> {
         let name = chosen.remove(j).term.name;
         let mut removed = vec![name];
         chosen.retain(|c| {
@@ -2195,6 +2244,9 @@ impl Searcher<'_> {
             }
             !dependent
         });
+        for k in 0..chosen.len() {
+            self.rechoose(chosen, k, base_fit);
+        }
         removed
     }
 
@@ -2269,27 +2321,25 @@ impl Searcher<'_> {
             let coef = fit.coefficients(&self.obs.values);
             let scale = covariance_scale(self.obs, (fit.rss_w() / fit.dof().max(1) as f64).sqrt());
             let mut at: usize = self.base.iter().map(Term::width).sum();
-            let z: Vec<f64> = causes
+            let (z, held): (Vec<f64>, Vec<Option<Held>>) = causes
                 .iter()
                 .zip(order_widening(base_fit, wide, causes))
                 .map(|(t, widening)| {
                     let k = t.width();
                     let c = coef.rows(at, k).into_owned();
                     at += k;
-                    widening.map_or(0.0, |(_, wide)| {
-                        largest_z(&t.estimates(c.as_slice(), &(wide * scale)))
-                    })
+                    match widening {
+                        Ok((_, wide)) => {
+                            (largest_z(&t.estimates(c.as_slice(), &(wide * scale))), None)
+                        }
+                        Err(held) => (0.0, Some(held)),
+                    }
                 })
-                .collect();
-            let Some((k, _)) = z
-                .iter()
-                .enumerate()
-                .filter(|(_, z)| **z < 2.0)
-                .min_by(|a, b| a.1.total_cmp(b.1))
-            else {
+                .unzip();
+            let Some((k, _)) = leaving(&held, |k| z[k]) else {
                 return (x, fit);
             };
-            self.remove(chosen, k);
+            self.remove(chosen, k, base_fit);
         }
     }
 
@@ -3190,6 +3240,25 @@ fn largest_z(estimates: &[Estimate]) -> f64 {
         .iter()
         .map(|e| e.value.abs() / e.uncertainty.max(1e-300))
         .fold(0.0, f64::max)
+}
+
+/// Which of a model's causes leaves first ([`conclude`], [`Searcher::drop_resting_on_orders`]).
+/// Of those the wider model holds (`held[k]`, from [`order_widening`]): the latest to enter of
+/// those the base and the other causes hold — it made the model hold them; the earlier ones stay
+/// and are found again without it ([`Searcher::rechoose`]) — else the first that the base's next
+/// orders hold. Else the least determined, `z(k)` (largest |estimate| ÷ u) below 2. With the
+/// cause, whether (and what) held it.
+fn leaving(held: &[Option<Held>], z: impl Fn(usize) -> f64) -> Option<(usize, Option<Held>)> {
+    let by_model = held.iter().rposition(|h| *h == Some(Held::ByModel));
+    let by_orders = held.iter().position(|h| *h == Some(Held::ByOrders));
+    if let Some(k) = by_model.or(by_orders) {
+        return Some((k, held[k]));
+    }
+    (0..held.len())
+        .map(|k| (k, z(k)))
+        .filter(|(_, z)| *z < 2.0)
+        .min_by(|a, b| a.1.total_cmp(&b.1))
+        .map(|(k, _)| (k, None))
 }
 
 /// Whether `c` may be a next order of an error of a model (`in_model` tells its terms by

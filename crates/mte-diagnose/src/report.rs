@@ -163,7 +163,7 @@ pub fn markdown(d: &Diagnosis, title: &str) -> String {
                 .collect();
             let _ = writeln!(
                 s,
-                "Not every fold's search named the same causes: {}.\n",
+                "Not every fold's search named the causes above; the folds' searches named: {}.\n",
                 folds.join(" | ")
             );
         }
