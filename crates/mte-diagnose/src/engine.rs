@@ -2109,6 +2109,23 @@ impl Searcher<'_> {
         limits
     }
 
+    /// The fit of the base and every chosen term but `j` (those that build on it stay): a trial
+    /// term in `j`'s place has that fit's RSS less its increment.
+    fn fit_without(&self, chosen: &[Chosen], j: usize, base_fit: &Projector) -> Projector {
+        let terms: Vec<&Term> = self
+            .base
+            .iter()
+            .chain(
+                chosen
+                    .iter()
+                    .enumerate()
+                    .filter(|(k, _)| *k != j)
+                    .map(|(_, c)| &c.term),
+            )
+            .collect();
+        self.fit_of(base_fit, &terms).1
+    }
+
     /// Refines the hyper-parameter of every chosen term with all other terms fitted; keeps a
     /// refinement only when it lowers the weighted residual sum of squares.
     fn refit_scanned(&self, chosen: &mut [Chosen], base_fit: &Projector) {
@@ -2118,18 +2135,7 @@ impl Searcher<'_> {
             let others = std::cell::OnceCell::new();
             let rss_with = |t: &Term| {
                 let (rss, projector) = others.get_or_init(|| {
-                    let terms: Vec<&Term> = self
-                        .base
-                        .iter()
-                        .chain(
-                            chosen
-                                .iter()
-                                .enumerate()
-                                .filter(|(k, _)| *k != j)
-                                .map(|(_, c)| &c.term),
-                        )
-                        .collect();
-                    let projector = self.fit_of(base_fit, &terms).1;
+                    let projector = self.fit_without(chosen, j, base_fit);
                     (projector.rss_w(), projector)
                 });
                 rss - projector.increment(&t.columns).delta_rss
@@ -2166,18 +2172,7 @@ impl Searcher<'_> {
             .iter()
             .filter(|o| o.candidate == c.candidate)
             .count();
-        let others: Vec<&Term> = self
-            .base
-            .iter()
-            .chain(
-                chosen
-                    .iter()
-                    .enumerate()
-                    .filter(|(k, _)| *k != j)
-                    .map(|(_, o)| &o.term),
-            )
-            .collect();
-        let projector = self.fit_of(base_fit, &others).1;
+        let projector = self.fit_without(chosen, j, base_fit);
         let rss_with = |t: &Term| projector.rss_w() - projector.increment(&t.columns).delta_rss;
         let free = |t: &Term| !near_a_component(self.obs, t, chosen, c.candidate, Some(j));
         let increments =
@@ -2188,15 +2183,25 @@ impl Searcher<'_> {
         else {
             return;
         };
-        let term = candidate
+        let rechosen = candidate
             .refine(best, &rss_with)
             .filter(|r| free(r) && rss_with(r) < rss_with(&variants[best]))
             .unwrap_or_else(|| variants[best].clone());
-        if rss_with(&term) >= rss_with(&c.term) && component == c.component {
+        let (term, variant) = if rss_with(&rechosen) < rss_with(&c.term) {
+            (rechosen, best)
+        } else if component != c.component {
+            // The same period or time constant, under the name of the component it now is.
+            let Some(same) =
+                hyper_of(&c.term.family, false).and_then(|(h, _)| candidate.at(c.variant, h))
+            else {
+                return;
+            };
+            (same, c.variant)
+        } else {
             return;
-        }
+        };
         let c = &mut chosen[j];
-        (c.term, c.variant, c.component) = (nth_component(term, component), best, component);
+        (c.term, c.variant, c.component) = (nth_component(term, component), variant, component);
     }
 
     /// Backward pruning: every cause is re-tested in the complete model (F test of removing it,
