@@ -3876,4 +3876,28 @@ mod tests {
             / phases as f64;
         approx::assert_abs_diff_eq!(power, DETECTION_POWER, epsilon = 2e-3);
     }
+
+    #[test]
+    fn the_latest_cause_the_model_holds_leaves_before_one_on_the_orders_or_a_weak_one() {
+        use Held::{ByModel, ByOrders};
+        let z = [5.0, 1.5, 0.5, 3.0];
+        let by = |k: usize| z[k];
+        // Of the causes the base and the others hold, the latest to enter.
+        assert_eq!(
+            leaving(&[Some(ByModel), None, Some(ByModel), None], by),
+            Some((2, Some(ByModel)))
+        );
+        assert_eq!(
+            leaving(&[Some(ByOrders), None, None, Some(ByModel)], by),
+            Some((3, Some(ByModel)))
+        );
+        // Else the first the orders hold.
+        assert_eq!(
+            leaving(&[None, Some(ByOrders), None, Some(ByOrders)], by),
+            Some((1, Some(ByOrders)))
+        );
+        // Else the least determined below 2; none when every one is determined.
+        assert_eq!(leaving(&[None; 4], by), Some((2, None)));
+        assert_eq!(leaving(&[None; 2], |_| 2.5), None);
+    }
 }
