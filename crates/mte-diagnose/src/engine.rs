@@ -2167,7 +2167,15 @@ impl Searcher<'_> {
             return;
         }
         let candidate = self.chosen_candidate(c);
-        let variants = candidate.variants(self.obs);
+        // A search's pool holds the variants; the final model's searcher has no pool.
+        let built;
+        let variants: &[Term] = match self.pool.source.iter().position(|&s| s == c.candidate) {
+            Some(entry) => &self.pool.variants[entry],
+            None => {
+                built = candidate.variants(self.obs);
+                &built
+            }
+        };
         let component = chosen[..j]
             .iter()
             .filter(|o| o.candidate == c.candidate)
