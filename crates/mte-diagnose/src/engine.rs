@@ -1499,7 +1499,11 @@ impl Searcher<'_> {
             .map(|(&ci, inc)| (ci, f_test(rss, inc.delta_rss, inc.new_rank, dof)))
             .collect();
         let eligible = tested.len();
-        tested.sort_by(|a, b| a.1.total_cmp(&b.1));
+        // Most significant first. Two higher orders the data cannot tell apart (the straightness
+        // of an axis and its angular error times a constant offset, on tracker lengths) have
+        // the same p-value but for rounding: they rank by their place in the library, so that
+        // rounding (another CPU, another summation order) does not decide between them.
+        tested.sort_by(|a, b| rounding_free(a.1).total_cmp(&rounding_free(b.1)));
         tested
             .into_iter()
             .take_while(|&(_, p)| p * (eligible as f64) < COMPLETION_LEVEL)
@@ -3255,6 +3259,12 @@ fn largest_z(estimates: &[Estimate]) -> f64 {
         .fold(0.0, f64::max)
 }
 
+/// A p-value with its last digits dropped (to a relative 1e-9): a choice between candidates
+/// whose tests differ by rounding alone is then made by their order, not by the rounding.
+fn rounding_free(p: f64) -> f64 {
+    (p.max(f64::MIN_POSITIVE).ln() * 1e9).round()
+}
+
 /// Which of a model's causes leaves first ([`conclude`], [`Searcher::drop_resting_on_orders`]).
 /// Of those the wider model holds (`held[k]`, from [`order_widening`]): the latest to enter of
 /// those the base and the other causes hold — it made the model hold them; the earlier ones stay
@@ -3883,6 +3893,19 @@ mod tests {
             .sum::<f64>()
             / phases as f64;
         approx::assert_abs_diff_eq!(power, DETECTION_POWER, epsilon = 2e-3);
+    }
+
+    #[test]
+    fn p_values_that_differ_by_rounding_alone_rank_alike() {
+        // Two higher orders of tracker data the lengths cannot tell apart (ECX and EYX P4-6,
+        // as they came out of one run).
+        let (a, b) = (3.131_477_092_071_274_3e-3, 3.131_477_092_071_452e-3);
+        assert!(a != b);
+        assert_eq!(rounding_free(a), rounding_free(b));
+        // A real difference, and an underflow to zero, still rank.
+        assert!(rounding_free(3.1314e-3) < rounding_free(3.1315e-3));
+        assert!(rounding_free(0.0) < rounding_free(1e-300));
+        assert!(rounding_free(1e-300) < rounding_free(1e-299));
     }
 
     #[test]
