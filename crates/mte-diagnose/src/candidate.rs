@@ -203,11 +203,34 @@ pub struct SlotEffect {
     pub column: DVec,
     /// The measurement that would separate it from what it is confounded with, if known.
     pub separated_by: Option<String>,
-    /// For instruments set up at a reference pose (an R-test centred at the start): the
-    /// sensitivity of every observation to the slot's value at its setup's reference pose, and the
-    /// slot's axis coordinate there (one per observation). The effect of an error function g is
-    /// then `column·g(s) + reference column·g(s_ref)`.
-    pub reference: Option<(DVec, Vec<f64>)>,
+    /// For instruments set up at a reference pose (an R-test centred at each setup's start):
+    /// how every observation sees the slot's value there ([`Reference`]).
+    pub reference: Option<Reference>,
+}
+
+/// Where an instrument was zeroed: each observation's setup reference pose (an R-test's
+/// centring). An error function g of the slot's axis coordinate s acts as
+/// `column·g(s) + reference.column·g(s_ref)`; an error that changes in time, d(t), as
+/// `column·d(t) + reference.column·d(t_ref)` — a drift since the centring, not since the start.
+#[derive(Debug, Clone)]
+pub struct Reference {
+    /// Sensitivity of every observation to the slot's value at its setup's reference pose.
+    pub column: DVec,
+    /// The slot's axis coordinate at the reference pose (one per observation).
+    pub coordinate: Vec<f64>,
+    /// The time of the reference pose, s (one per observation).
+    pub time_s: Vec<f64>,
+}
+
+impl Reference {
+    /// The reference on the observations `rows` only.
+    fn select_rows(&self, rows: &[usize]) -> Reference {
+        Reference {
+            column: DVec::from_iterator(rows.len(), rows.iter().map(|&i| self.column[i])),
+            coordinate: pick(&self.coordinate, rows),
+            time_s: pick(&self.time_s, rows),
+        }
+    }
 }
 
 impl SlotEffect {
@@ -215,12 +238,7 @@ impl SlotEffect {
     fn select_rows(&self, rows: &[usize]) -> SlotEffect {
         SlotEffect {
             column: DVec::from_iterator(rows.len(), rows.iter().map(|&i| self.column[i])),
-            reference: self.reference.as_ref().map(|(r, s)| {
-                (
-                    DVec::from_iterator(rows.len(), rows.iter().map(|&i| r[i])),
-                    pick(s, rows),
-                )
-            }),
+            reference: self.reference.as_ref().map(|r| r.select_rows(rows)),
             name: self.name.clone(),
             label: self.label.clone(),
             meaning: self.meaning.clone(),
@@ -233,7 +251,7 @@ impl SlotEffect {
     /// The effect of a constant error.
     fn constant_column(&self) -> DVec {
         match &self.reference {
-            Some((r, _)) => &self.column + r,
+            Some(r) => &self.column + &r.column,
             None => self.column.clone(),
         }
     }
@@ -250,7 +268,7 @@ impl SlotEffect {
     fn positions(&self, values: &[f64]) -> Vec<f64> {
         match &self.reference {
             None => values.to_vec(),
-            Some((_, s_ref)) => values.iter().chain(s_ref.iter()).copied().collect(),
+            Some(r) => values.iter().chain(r.coordinate.iter()).copied().collect(),
         }
     }
 
@@ -259,8 +277,8 @@ impl SlotEffect {
         let n = self.column.len();
         match &self.reference {
             None => DMat::from_fn(n, m.ncols(), |i, j| self.column[i] * m[(i, j)]),
-            Some((r, _)) => DMat::from_fn(n, m.ncols(), |i, j| {
-                self.column[i] * m[(i, j)] + r[i] * m[(n + i, j)]
+            Some(r) => DMat::from_fn(n, m.ncols(), |i, j| {
+                self.column[i] * m[(i, j)] + r.column[i] * m[(n + i, j)]
             }),
         }
     }
@@ -270,11 +288,12 @@ impl SlotEffect {
 /// (location, squareness, setup), component errors as low-order polynomials, scale errors,
 /// periodic positioning errors with unknown period, reversal errors, and thermal drift (linear
 /// and first-order exponential) of constants. `drifting` lists further terms (usually the base
-/// model's constants) whose drift in time is a candidate too.
+/// model's constants) whose drift in time is a candidate too, each with its reference pose where
+/// the instrument was zeroed ([`SlotEffect::reference`]).
 pub fn physical_effects(
     obs: &Observations,
     slots: &[SlotEffect],
-    drifting: &[&Term],
+    drifting: &[(&Term, Option<&Reference>)],
 ) -> Vec<Box<dyn Candidate>> {
     let mut out: Vec<Box<dyn Candidate>> = Vec::new();
     // Time effects only where a pose is measured again later: otherwise a drift cannot be told
@@ -323,7 +342,7 @@ pub fn physical_effects(
                     slot.quantity,
                 );
                 if let Some((t_values, floor)) = times {
-                    for drift in drift_candidates(&t, t_values, floor) {
+                    for drift in drift_candidates(&t, slot.reference.as_ref(), t_values, floor) {
                         out.push(Box::new(Requires {
                             term: t.name.clone(),
                             inner: drift,
@@ -448,9 +467,9 @@ pub fn physical_effects(
         }
     }
     if let Some((t_values, floor)) = times {
-        for t in drifting {
+        for &(t, reference) in drifting {
             if t.width() == 1 && !matches!(t.family, Family::Drift { .. }) {
-                out.extend(drift_candidates(t, t_values, floor));
+                out.extend(drift_candidates(t, reference, t_values, floor));
             }
         }
     }
@@ -1040,9 +1059,26 @@ impl Candidate for Alternatives {
 }
 
 /// Linear and first-order thermal drift of a constant; time constants from `floor` (the
-/// interval between repeated visits of a pose) up.
-fn drift_candidates(constant: &Term, t: &[f64], floor: f64) -> Vec<Box<dyn Candidate>> {
+/// interval between repeated visits of a pose) up. With a `reference` pose, the constant's
+/// column is its effect at the reading and at the reference together, and the drift acts at
+/// each at its own time: `(constant − reference)·d(t) + reference·d(t_ref)`.
+fn drift_candidates(
+    constant: &Term,
+    reference: Option<&Reference>,
+    t: &[f64],
+    floor: f64,
+) -> Vec<Box<dyn Candidate>> {
     let t0 = t.iter().copied().fold(f64::INFINITY, f64::min);
+    // Per observation: the constant's column, its reference part and the reference time (the
+    // reading's own time where there is none: the drift then acts at the reading alone).
+    let reference_part: Vec<f64> = match reference {
+        Some(r) => r.column.iter().copied().collect(),
+        None => vec![0.0; t.len()],
+    };
+    let t_ref: Vec<f64> = match reference {
+        Some(r) => r.time_s.clone(),
+        None => t.to_vec(),
+    };
     let q = constant.coefficients[0].1;
     let rate = match q {
         Quantity::Angle => Quantity::AngleRate,
@@ -1059,7 +1095,9 @@ fn drift_candidates(constant: &Term, t: &[f64], floor: f64) -> Vec<Box<dyn Candi
         family: Family::Drift {
             time_constant_s: None,
         },
-        columns: DMat::from_fn(t.len(), 1, |i, _| col[i] * (t[i] - t0)),
+        columns: DMat::from_fn(t.len(), 1, |i, _| {
+            col[i] * (t[i] - t0) - reference_part[i] * (t[i] - t_ref[i])
+        }),
         coefficients: vec![(format!("{} rate", constant.name), rate)],
         summary: Summary::EachCoefficient,
         exposed_by: Some("t".into()),
@@ -1076,7 +1114,10 @@ fn drift_candidates(constant: &Term, t: &[f64], floor: f64) -> Vec<Box<dyn Candi
             time_constant_s: Some(tau),
         },
         columns: {
-            let at = |i: usize| column[i] * (1.0 - (-(times[i] - t0) / tau).exp());
+            let d = |t: f64| 1.0 - (-(t - t0) / tau).exp();
+            let at = |i: usize| {
+                column[i] * d(times[i]) - reference_part[i] * (d(times[i]) - d(t_ref[i]))
+            };
             match rows {
                 None => DMat::from_fn(times.len(), 1, |i, _| at(i)),
                 Some(rows) => DMat::from_fn(rows.len(), 1, |k, _| at(rows[k])),
@@ -1117,5 +1158,59 @@ fn format_period(p: f64, rotary: bool) -> String {
         format!("{:.1}°", p.to_degrees())
     } else {
         format!("{p:.2} mm")
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_drift_acts_since_the_reference_pose_where_the_instrument_was_zeroed() {
+        // Four readings in two setups, each zeroed at its start (t_ref 0 and 100 s): a drift
+        // d(t) of the error acts as column·d(t) + reference·d(t_ref).
+        let t = [0.0, 50.0, 100.0, 150.0];
+        let column = DVec::from_vec(vec![1.0, 0.5, -0.3, 2.0]);
+        let reference = Reference {
+            column: DVec::from_vec(vec![-0.2, -0.2, 0.7, 0.7]),
+            coordinate: vec![0.0; 4],
+            time_s: vec![0.0, 0.0, 100.0, 100.0],
+        };
+        let constant = Term::single(
+            "E",
+            "an error",
+            "",
+            Family::Location,
+            &column + &reference.column,
+            Quantity::Length,
+        );
+        let drifts = drift_candidates(&constant, Some(&reference), &t, 10.0);
+        let obs = Observations {
+            values: DVec::zeros(4),
+            sigma: None,
+            variables: Vec::new(),
+            setup: vec![0, 0, 1, 1],
+            setup_names: vec!["a".into(), "b".into()],
+            channel: vec![0; 4],
+            channel_names: vec!["d".into()],
+            setup_kind: "setup".into(),
+            quantity: Quantity::Length,
+        };
+        let expect = |d: &dyn Fn(f64) -> f64| -> Vec<f64> {
+            (0..4)
+                .map(|i| column[i] * d(t[i]) + reference.column[i] * d(reference.time_s[i]))
+                .collect()
+        };
+        let linear = drifts[0].variants(&obs).remove(0);
+        let tau = 80.0;
+        let first_order = drifts[1].at(0, tau).expect("a time constant");
+        for (term, d) in [
+            (&linear, &(|t: f64| t) as &dyn Fn(f64) -> f64),
+            (&first_order, &|t: f64| 1.0 - (-t / tau).exp()),
+        ] {
+            for (got, want) in term.columns.iter().zip(expect(d)) {
+                approx::assert_abs_diff_eq!(*got, want, epsilon = 1e-12);
+            }
+        }
     }
 }

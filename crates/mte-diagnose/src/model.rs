@@ -171,6 +171,26 @@ pub fn prepare(
             .map_err(field_error)?,
     );
     let completions = spec.completions(&observations, &effects.errors);
+    let drifting: Vec<&Term> = match effects.drift {
+        DriftOf::Nothing => Vec::new(),
+        DriftOf::Instrument => base[..n_instrument].iter().collect(),
+        DriftOf::WholeBase => base.iter().collect(),
+    };
+    // A base error drifts from its value at the instrument's reference pose, where it was zeroed.
+    let references: Vec<Option<crate::candidate::Reference>> = drifting
+        .iter()
+        .map(|t| {
+            effects
+                .errors
+                .iter()
+                .find(|e| e.name == t.name)
+                .and_then(|e| e.reference.clone())
+        })
+        .collect();
+    let drifting: Vec<_> = drifting
+        .into_iter()
+        .zip(references.iter().map(Option::as_ref))
+        .collect();
     // A constant in the base is no candidate; its drift is (as one of the base's).
     let errors: Vec<SlotEffect> = effects
         .errors
@@ -179,11 +199,6 @@ pub fn prepare(
             !(matches!(e.role, SlotRole::Constant { .. }) && base.iter().any(|b| b.name == e.name))
         })
         .collect();
-    let drifting: Vec<&Term> = match effects.drift {
-        DriftOf::Nothing => Vec::new(),
-        DriftOf::Instrument => base[..n_instrument].iter().collect(),
-        DriftOf::WholeBase => base.iter().collect(),
-    };
     let mut candidates = physical_effects(&observations, &errors, &drifting);
     candidates.extend(effects.candidates);
     candidates.extend(completions);

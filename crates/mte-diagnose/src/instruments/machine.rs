@@ -7,7 +7,7 @@ use mte_kinematics::{AxisKind, Component, Machine, SlotKind};
 use mte_linalg::{DMat, DVec, Vec3};
 
 use crate::Result;
-use crate::candidate::{SlotEffect, SlotRole};
+use crate::candidate::{Reference, SlotEffect, SlotRole};
 use crate::dataset::{ManifestFile, Table};
 use crate::term::{Family, Quantity};
 
@@ -156,9 +156,8 @@ fn squareness_effect(
 
 /// Builds the named slot effects of a machine from the per-observation sensitivities `s`
 /// (n × n_slots), the axis values of the observations' variables, and hints on what separates
-/// them. With a
-/// `reference` (sensitivities to the slots' values at each observation's reference pose, and
-/// the axis values there), an error acts at both poses.
+/// them. With reference `poses` (where the instrument was zeroed: sensitivities to the
+/// slots' values there, the axis values and the time), an error acts at both poses.
 ///
 /// Position slots of linear axes are left out: their translations are constant offsets (setup
 /// errors say the same) and their rotations turn the whole branch downstream, which the
@@ -167,11 +166,10 @@ pub(crate) fn slot_effects(
     machine: &Machine,
     s: &DMat,
     obs: &crate::Observations,
-    reference: Option<(&DMat, &[Vec<f64>])>,
+    poses: Option<ReferencePoses<'_>>,
     hint: &dyn Fn(&SlotName) -> Option<String>,
 ) -> Vec<SlotEffect> {
     let axes = axis_values(machine, obs);
-    let reference_matrix = reference;
     let mut out = Vec::new();
     for j in 0..machine.n_slots() {
         let slot = machine.error_slots()[j];
@@ -194,13 +192,14 @@ pub(crate) fn slot_effects(
             _ => column_of(s),
         };
         let axis_k = axis.and_then(|a| machine.axis_index(&a.name));
-        let reference = reference.map(|(r, ref_axes)| {
-            let coordinate = axis_k
-                .map(|k| ref_axes[k].clone())
-                .unwrap_or_else(|| vec![0.0; column.len()]);
-            (column_of(r), coordinate)
+        let reference = poses.map(|poses| Reference {
+            column: column_of(poses.sensitivity),
+            coordinate: axis_k
+                .map(|k| poses.axes[k].clone())
+                .unwrap_or_else(|| vec![0.0; column.len()]),
+            time_s: poses.time_s.to_vec(),
         });
-        if column.amax() < 1e-12 && reference.as_ref().is_none_or(|(r, _)| r.amax() < 1e-12) {
+        if column.amax() < 1e-12 && reference.as_ref().is_none_or(|r| r.column.amax() < 1e-12) {
             continue;
         }
         let mut name = slot_name(machine, j);
@@ -218,8 +217,10 @@ pub(crate) fn slot_effects(
                 {
                     if let Some(mut sq) = squareness_effect(&name, &column, &axes[k], c, own) {
                         // A squareness is a constant: its effect at the reference pose adds in.
-                        if let Some((r, coordinate)) = &reference {
-                            if let Some(at_ref) = squareness_effect(&name, r, coordinate, c, own) {
+                        if let Some(r) = &reference {
+                            if let Some(at_ref) =
+                                squareness_effect(&name, &r.column, &r.coordinate, c, own)
+                            {
                                 sq.column += at_ref.column;
                             }
                         }
@@ -234,10 +235,14 @@ pub(crate) fn slot_effects(
                 rotary_child(machine, slot.body).filter(|_| axis.kind == AxisKind::Rotary)
             {
                 let col = absolute_location_column(machine, s, slot.body, child, c);
-                let reference = reference.as_ref().and_then(|(_, coordinate)| {
-                    let (r, _) = reference_matrix?;
-                    absolute_location_column(machine, r, slot.body, child, c)
-                        .map(|r| (r, coordinate.clone()))
+                let reference = reference.as_ref().and_then(|own| {
+                    let r = poses?.sensitivity;
+                    absolute_location_column(machine, r, slot.body, child, c).map(|column| {
+                        Reference {
+                            column,
+                            ..own.clone()
+                        }
+                    })
                 });
                 if let Some(col) = col.filter(|c| c.amax() > 1e-12) {
                     let carried = &machine.bodies()[child].name;
@@ -280,6 +285,18 @@ pub(crate) fn slot_effects(
         });
     }
     out
+}
+
+/// Each observation's setup reference pose (an R-test's centring), as [`slot_effects`] takes
+/// it.
+#[derive(Clone, Copy)]
+pub(crate) struct ReferencePoses<'a> {
+    /// Sensitivity of every observation to each slot's value there (n × slots).
+    pub sensitivity: &'a DMat,
+    /// The axis values there, one vector (one value per observation) per axis.
+    pub axes: &'a [Vec<f64>],
+    /// Its time, s (one per observation).
+    pub time_s: &'a [f64],
 }
 
 /// The body after `body` on its kinematic branch, when it is moved by a rotary axis.

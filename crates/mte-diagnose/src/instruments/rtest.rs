@@ -7,7 +7,9 @@ use mte_kinematics::{AxisKind, Machine};
 use mte_linalg::{DMat, DVec};
 use mte_rtest::model::NuisanceKind;
 
-use super::machine::{SlotName, axis_variables, load_machine, location_names, slot_effects};
+use super::machine::{
+    ReferencePoses, SlotName, axis_variables, load_machine, location_names, slot_effects,
+};
 use crate::Result;
 use crate::candidate::{BaseModelSpec, Candidate, SlotRole};
 use crate::data::{Observations, Variable, VariableKind};
@@ -105,6 +107,7 @@ impl ObservationModel for RTest {
         let axes_at_centring: Vec<Vec<f64>> = (0..machine.axes().len())
             .map(|k| per_obs(&|r| data.setups[data.readings[r].setup].centring_q[k]))
             .collect();
+        let centring_t_s = per_obs(&|r| data.setups[data.readings[r].setup].centring_t_s);
         let hint = |name: &SlotName| {
             match name.role {
             SlotRole::Constant { family: Family::Location } => Some(
@@ -117,7 +120,11 @@ impl ObservationModel for RTest {
             machine,
             &at_row,
             &self.observations,
-            Some((&at_ref, &axes_at_centring)),
+            Some(ReferencePoses {
+                sensitivity: &at_ref,
+                axes: &axes_at_centring,
+                time_s: &centring_t_s,
+            }),
             &hint,
         );
         let mut instrument: Vec<Term> = Vec::new();
