@@ -276,13 +276,14 @@ fn a_component_held_by_another_leaves_and_the_one_that_stays_is_found_again_alon
     assert_eq!(d.verdict, mte_diagnose::Verdict::Explained, "{:?}", d.notes);
     // No other period fits better than the one that stays (the ambiguity note's Δχ², relative
     // to it, are not below zero beyond rounding).
-    let better: Vec<f64> = d
+    let dchi2: Vec<f64> = d
         .notes
         .iter()
         .flat_map(|n| n.split("Δχ² = ").skip(1))
         .filter_map(|s| s.split(',').next()?.parse::<f64>().ok())
-        .filter(|&dchi2| dchi2 < -1.0)
         .collect();
+    assert!(!dchi2.is_empty(), "no ambiguity note read: {:?}", d.notes);
+    let better: Vec<f64> = dchi2.into_iter().filter(|&x| x < -1.0).collect();
     assert!(
         better.is_empty(),
         "periods that fit better: {better:?}; {:?}",

@@ -2167,9 +2167,9 @@ impl Searcher<'_> {
     /// each hold part of the other, and the one that stays must be found again alone.
     fn rechoose(&self, chosen: &mut [Chosen], j: usize, base_fit: &Projector) {
         let c = &chosen[j];
-        if hyper_of(&c.term.family, false).is_none() {
+        let Some((value, _)) = hyper_of(&c.term.family, false) else {
             return;
-        }
+        };
         let candidate = self.chosen_candidate(c);
         // A search's pool holds the variants; the final model's searcher has no pool.
         let built;
@@ -2203,9 +2203,7 @@ impl Searcher<'_> {
             (rechosen, best)
         } else if component != c.component {
             // The same period or time constant, under the name of the component it now is.
-            let Some(same) =
-                hyper_of(&c.term.family, false).and_then(|(h, _)| candidate.at(c.variant, h))
-            else {
+            let Some(same) = candidate.at(c.variant, value) else {
                 return;
             };
             (same, c.variant)
