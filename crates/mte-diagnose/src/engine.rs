@@ -11,7 +11,7 @@ use rayon::prelude::*;
 use serde::Serialize;
 
 use crate::candidate::{Candidate, Role};
-use crate::data::Observations;
+use crate::data::{Observations, VariableKind};
 use crate::fit::{
     Directions, Folds, Increment, Projector, SEPARABILITY_TOLERANCE, Solution, block_grams, design,
     max_abs, rms, separable_columns, solve, tr_mul, weighted_products, weighted_products_by_rows,
@@ -378,6 +378,8 @@ pub struct Compound {
     pub note: String,
     /// The findings, by name.
     pub findings: Vec<String>,
+    /// Their size together, where one is defined: a drift's change over the measured time.
+    pub estimate: Option<Estimate>,
 }
 
 /// The verdict of a diagnosis.
@@ -703,14 +705,14 @@ fn conclude(
     };
     let mut not_separable = search.not_separable;
     let mut rests_on_orders: Vec<String> = Vec::new();
-    let (terms, x, sol, fit, extended, hyper_u, extended_parameters) = loop {
+    let (terms, x, sol, fit, extended, cov, hyper_rows, extended_parameters) = loop {
         let terms: Vec<Term> = searcher.with(&chosen, None).into_iter().cloned().collect();
         let (x, fit) = searcher.fit_of(&base_fit, &terms.iter().collect::<Vec<_>>());
         let sol = solve(&x, &obs.values, w);
         let cv = fit.fold_fits(&folds, &x, &obs.values).residuals();
         let extended = quality(obs, &sol, &cv);
         let scale = covariance_scale(obs, extended.sigma0);
-        let (mut cov, hyper_u) =
+        let (mut cov, hyper_rows) =
             covariance_with_hyper(&searcher, &chosen, &terms, &x, &sol, w, scale);
         // The uncertainty of the base's orders: each cause's cofactor widened by what the next
         // order of every base error would add.
@@ -741,7 +743,16 @@ fn conclude(
         let extended_parameters = parameters(&terms, &sol.coef, &cov);
         let z = |p: &[ParameterEstimate], k: usize| largest_z(&p[base.len() + k].estimates);
         let Some((k, held)) = leaving(&held, |k| z(&extended_parameters, k)) else {
-            break (terms, x, sol, fit, extended, hyper_u, extended_parameters);
+            break (
+                terms,
+                x,
+                sol,
+                fit,
+                extended,
+                cov,
+                hyper_rows,
+                extended_parameters,
+            );
         };
         // A cause the base's next orders would hold, or whose size they leave undetermined,
         // rests on the base's orders alone: the report lists it as not separable from them.
@@ -795,7 +806,7 @@ fn conclude(
             family: c.term.family.clone(),
             estimates: extended_parameters[base.len() + k].estimates.clone(),
             hyper_parameter: hyper_of(&c.term.family, exposed_by_rotary(obs, &c.term))
-                .zip(hyper_u[k])
+                .zip(hyper_rows[k].map(|r| cov[(r, r)].sqrt()))
                 .map(|((v, q), u)| Estimate {
                     name: if q == Quantity::Duration {
                         "time constant".into()
@@ -816,6 +827,31 @@ fn conclude(
             exposed_by: c.term.exposed_by.clone(),
         })
         .collect();
+    // A drift's size over the data: the change of its parameter from the first reading to the
+    // last (a first-order drift's own size is the asymptote, beyond the data; a linear one's
+    // is a rate).
+    let offsets: Vec<usize> = chosen
+        .iter()
+        .scan(base.iter().map(Term::width).sum::<usize>(), |at, c| {
+            let first = *at;
+            *at += c.term.width();
+            Some(first)
+        })
+        .collect();
+    let change = |members: &[usize]| {
+        drift_change(
+            obs,
+            &chosen,
+            members,
+            &offsets,
+            &sol.coef,
+            &cov,
+            &hyper_rows,
+        )
+    };
+    for (k, f) in findings.iter_mut().enumerate() {
+        f.estimates.extend(change(&[k]));
+    }
     // A period the positions cannot pin down: other periods that fit about as well widen the
     // amplitude's uncertainty and are named. (A long record samples densely: not needed there.)
     let mut ambiguity_notes = Vec::new();
@@ -936,6 +972,7 @@ fn conclude(
             if rests_on_orders.len() == 1 { "its" } else { "their" },
         ));
     }
+    notes.extend(drifts_at_the_shortest(&searcher, &chosen));
     for v in &obs.variables {
         if !crate::candidate::varies(&v.values) {
             notes.push(match v.kind {
@@ -996,7 +1033,7 @@ fn conclude(
             &searcher, &chosen, &terms, w, s2, &covered,
         ));
     }
-    let drifts = compound_drifts(&findings);
+    let drifts = compound_drifts(&findings, change);
     let covered: Vec<String> = drifts.iter().flat_map(|c| c.findings.clone()).collect();
     compound.extend(drifts);
     compound.extend(drift_shapes(
@@ -2517,6 +2554,7 @@ fn harmonic_families(findings: &[Finding]) -> Vec<Compound> {
                     names.join(", ")
                 ),
                 findings: members.iter().map(|(_, g)| g.name.clone()).collect(),
+                estimate: None,
             });
         }
     }
@@ -2704,6 +2742,7 @@ fn aliased_harmonic_families(
         out.push(Compound {
             note,
             findings: names,
+            estimate: None,
         });
     }
     out
@@ -2712,7 +2751,10 @@ fn aliased_harmonic_families(
 /// Drifts of one parameter found in two forms (linear and first-order): together they describe
 /// a course neither has — a drift that rises and falls, or speeds up — over the measured time
 /// only, which the report says in one sentence.
-fn compound_drifts(findings: &[Finding]) -> Vec<Compound> {
+fn compound_drifts(
+    findings: &[Finding],
+    change: impl Fn(&[usize]) -> Option<Estimate>,
+) -> Vec<Compound> {
     let mut out: Vec<Compound> = Vec::new();
     for f in findings {
         if !matches!(f.family, Family::Drift { .. }) {
@@ -2725,25 +2767,126 @@ fn compound_drifts(findings: &[Finding]) -> Vec<Compound> {
         {
             continue;
         }
-        let members: Vec<String> = findings
-            .iter()
-            .filter(|g| {
+        let members: Vec<usize> = (0..findings.len())
+            .filter(|&k| {
+                let g = &findings[k];
                 matches!(g.family, Family::Drift { .. })
                     && g.name.split(" drift").next() == Some(stem)
             })
-            .map(|g| g.name.clone())
             .collect();
         if members.len() > 1 {
+            let names: Vec<String> = members.iter().map(|&k| findings[k].name.clone()).collect();
+            let estimate = change(&members);
             out.push(Compound {
                 note: format!(
-                    "{} are one drift of {stem} whose course is neither linear nor a first-order settling (it may rise and fall): together they describe it over the measured time, not beyond it",
-                    members.join(" and ")
+                    "{} are one drift of {stem} whose course is neither linear nor a first-order settling (it may rise and fall): together they describe it over the measured time, not beyond it{}",
+                    names.join(" and "),
+                    estimate.as_ref().map_or(String::new(), |e| format!(
+                        "; together they change {stem} by {} over the measured time",
+                        e.text
+                    ))
                 ),
-                findings: members,
+                findings: names,
+                estimate,
             });
         }
     }
     out
+}
+
+/// A note for each first-order drift whose time constant is the shortest its candidate searches
+/// (within 1 %): the drift may be faster than the data can follow, and its change larger than
+/// stated.
+fn drifts_at_the_shortest(searcher: &Searcher<'_>, chosen: &[Chosen]) -> Vec<String> {
+    let obs = searcher.obs;
+    let tau_of = |t: &Term| match t.family {
+        Family::Drift {
+            time_constant_s: Some(tau),
+        } => Some(tau),
+        _ => None,
+    };
+    chosen
+        .iter()
+        .filter_map(|c| {
+            let tau = tau_of(&c.term)?;
+            let shortest = searcher
+                .chosen_candidate(c)
+                .variants(obs)
+                .iter()
+                .filter_map(tau_of)
+                .fold(f64::INFINITY, f64::min);
+            (tau <= 1.01 * shortest).then(|| {
+                let why = if obs.revisit_interval() == Some(shortest) {
+                    "the interval between two visits of a pose, below which a drift cannot be told from a dependence on the pose"
+                } else {
+                    "a twentieth of the measured time"
+                };
+                format!(
+                    "the time constant of {} is the shortest searched ({shortest:.0} s, {why}): the drift may be faster, and then its change over the measured time is larger in size than stated",
+                    c.term.name
+                )
+            })
+        })
+        .collect()
+}
+
+/// The change over the measured time (first reading to last) of the parameter whose drift the
+/// findings `members` (indices into `chosen`, drifts of one parameter) describe together, with
+/// its standard uncertainty by the delta method over the final model's covariance `cov` of the
+/// coefficients (each chosen term's first column at `offsets`) and of the time constants
+/// (`hyper_rows`): a linear drift's rate × T, a first-order one's `A (1 − e^(−T/τ))`. `None`
+/// where no member is a drift or the data have no time.
+fn drift_change(
+    obs: &Observations,
+    chosen: &[Chosen],
+    members: &[usize],
+    offsets: &[usize],
+    coef: &DVec,
+    cov: &DMat,
+    hyper_rows: &[Option<usize>],
+) -> Option<Estimate> {
+    let t = &obs.variable_of_kind(VariableKind::Time)?.values;
+    let span = t.iter().copied().fold(f64::NEG_INFINITY, f64::max)
+        - t.iter().copied().fold(f64::INFINITY, f64::min);
+    let mut g = DVec::zeros(cov.nrows());
+    let (mut value, mut quantity, mut stem) = (0.0, None, "");
+    for &k in members {
+        let term = &chosen[k].term;
+        let Family::Drift { time_constant_s } = term.family else {
+            continue;
+        };
+        let (at, a) = (offsets[k], coef[offsets[k]]);
+        stem = term.name.split(" drift").next().unwrap_or_default();
+        quantity = Some(match term.coefficients[0].1 {
+            Quantity::LengthRate => Quantity::Length,
+            Quantity::AngleRate => Quantity::Angle,
+            Quantity::RatioRate => Quantity::Ratio,
+            q => q,
+        });
+        match time_constant_s {
+            None => {
+                value += a * span;
+                g[at] = span;
+            }
+            Some(tau) => {
+                let e = (-span / tau).exp();
+                value += a * (1.0 - e);
+                g[at] = 1.0 - e;
+                if let Some(r) = hyper_rows[k] {
+                    g[r] = -a * span * e / (tau * tau);
+                }
+            }
+        }
+    }
+    let quantity = quantity?;
+    let u = g.dot(&(cov * &g)).max(0.0).sqrt();
+    Some(Estimate {
+        name: format!("{stem} change over the measured time"),
+        value,
+        uncertainty: u,
+        quantity,
+        text: quantity.format(value, u),
+    })
 }
 
 /// Drifts found in one form (linear or first-order) whose course the data say is another: a
@@ -2797,6 +2940,7 @@ fn drift_shapes(
                     crate::report::p_text(p)
                 ),
                 findings: vec![d.name.clone()],
+                estimate: None,
             })
         })
         .collect()
@@ -3055,9 +3199,10 @@ fn gauss_newton_hyper(searcher: &Searcher<'_>, chosen: &mut [Chosen], w: &DVec) 
 /// Cofactor of the coefficients of the final model, widened by the uncertainty of the chosen
 /// terms' periods and time constants: the design is augmented by each hyper-parameter's
 /// derivative column (Gauss–Newton at the optimum, [`hyper_augmented`]), whose block of the
-/// inverse normal matrix then carries its variance. Returns the coefficients' cofactor and each
-/// chosen term's hyper-parameter cofactor standard deviation (`None` without one, or where the
-/// candidate cannot re-evaluate it; rotary harmonics are exact and have none).
+/// inverse normal matrix then carries its variance. Returns the covariance of the coefficients
+/// (the first `x.ncols()` rows) and of the hyper-parameters after them, and each chosen term's
+/// hyper-parameter row (`None` without one, or where the candidate cannot re-evaluate it;
+/// rotary harmonics are exact and have none).
 fn covariance_with_hyper(
     searcher: &Searcher<'_>,
     chosen: &[Chosen],
@@ -3066,7 +3211,7 @@ fn covariance_with_hyper(
     sol: &Solution,
     w: &DVec,
     scale: f64,
-) -> (DMat, Vec<Option<f64>>) {
+) -> (DMat, Vec<Option<usize>>) {
     let p = x.ncols();
     let mut hyper = vec![None; chosen.len()];
     let (cofactor, extra, aug) = match hyper_augmented(searcher, chosen, x, sol, w) {
@@ -3100,12 +3245,11 @@ fn covariance_with_hyper(
         cofactor[(i, j)] * d[i] * d[j]
     });
     for (e, (k, _)) in extra.iter().enumerate() {
-        let v = cov[(p + e, p + e)];
-        if v > 0.0 {
-            hyper[*k] = Some(v.sqrt());
+        if cov[(p + e, p + e)] > 0.0 {
+            hyper[*k] = Some(p + e);
         }
     }
-    (cov.view((0, 0), (p, p)).into_owned(), hyper)
+    (cov, hyper)
 }
 
 /// Per block of parameters (`(first, width)` in the design `a`, cofactor `cof`, residuals `r`),

@@ -20,6 +20,9 @@ struct Hidden {
     pitch_period_mm: f64,
     scale_ppm: f64,
     zero_drift_um_per_min: f64,
+    /// A first-order settling of the zero: its size and time constant.
+    zero_settling_um: f64,
+    zero_settling_tau_s: f64,
     /// A second, longer periodic error (a wave of the screw or the guideway).
     wave_amplitude_um: f64,
     wave_period_mm: f64,
@@ -60,6 +63,8 @@ fn write_dataset_at(name: &str, targets: &[f64], hidden: Hidden, seed: u64) -> P
                         * (std::f64::consts::TAU * x / hidden.wave_period_mm.max(1.0) - 1.1).sin()
                     + hidden.scale_ppm * 1e-3 * x
                     + hidden.zero_drift_um_per_min * t / 60.0
+                    + hidden.zero_settling_um
+                        * (1.0 - (-t / hidden.zero_settling_tau_s.max(1.0)).exp())
                     + noise.sample(&mut rng);
                 csv.push_str(&format!(
                     "{run},{},{x:.3},{t:.1},{dev:.4}\n",
@@ -139,6 +144,66 @@ fn hidden_reversal_is_found_and_sized() {
         d.held_out.as_ref().unwrap().diagnosed_rms * 1e3 < 1.1 * NOISE_UM,
         "{}",
         d.held_out.as_ref().unwrap().diagnosed_rms
+    );
+}
+
+/// A drift's size over the data: its change from the first reading (t = 0) to the last
+/// (t = 4 036 s), whether it is found linear or first-order.
+#[test]
+fn a_drift_states_its_change_over_the_measured_time() {
+    let last_t = 4.0 * (5 * 2 * 101 - 1) as f64;
+    let settling = Hidden {
+        zero_settling_um: 3.0,
+        zero_settling_tau_s: 1500.0,
+        ..Hidden::default()
+    };
+    let linear = Hidden {
+        zero_drift_um_per_min: 0.05,
+        ..Hidden::default()
+    };
+    for (name, hidden, found, truth_um) in [
+        (
+            "settling",
+            settling,
+            "EXX offset drift exp",
+            3.0 * (1.0 - (-last_t / 1500.0_f64).exp()),
+        ),
+        ("linear", linear, "EXX offset drift", 0.05 * last_t / 60.0),
+    ] {
+        let d = run(&write_dataset(name, hidden, 21));
+        let f = d
+            .finding(found)
+            .unwrap_or_else(|| panic!("{name}: {found} not found: {:?}", d.findings));
+        let change = f
+            .estimates
+            .iter()
+            .find(|e| e.name == "EXX offset change over the measured time")
+            .unwrap_or_else(|| panic!("{name}: no change over the measured time: {f:?}"));
+        let (v, u) = (change.value * 1e3, change.uncertainty * 1e3);
+        assert!(
+            u > 0.0 && u < 0.2 * truth_um.abs() && within(v, u, truth_um, 3.0),
+            "{name}: change {v:.3} ± {u:.3} µm, truth {truth_um:.3} µm"
+        );
+    }
+}
+
+/// A settling faster than the interval between two visits of a target (808 s) is found at the
+/// shortest time constant searched, and the report says that the drift may be faster.
+#[test]
+fn a_drift_faster_than_the_revisits_is_said_to_be_possibly_faster() {
+    let hidden = Hidden {
+        zero_settling_um: 3.0,
+        zero_settling_tau_s: 300.0,
+        ..Hidden::default()
+    };
+    let d = run(&write_dataset("fast-settling", hidden, 22));
+    assert!(
+        d.notes.iter().any(|n| n.starts_with(
+            "the time constant of EXX offset drift exp is the shortest searched (808 s"
+        )),
+        "findings {:?}, notes {:?}",
+        d.findings.iter().map(|f| &f.name).collect::<Vec<_>>(),
+        d.notes
     );
 }
 

@@ -75,6 +75,7 @@ pub(crate) fn write(spec: &Spec, rng: &mut ChaCha8Rng, dir: &Path) -> std::io::R
             signed: true,
             period: None,
             detail: "ordinary reversal".into(),
+            record_change: None,
         });
     }
     let mut reversal_um = ordinary_reversal_um;
@@ -99,6 +100,7 @@ pub(crate) fn write(spec: &Spec, rng: &mut ChaCha8Rng, dir: &Path) -> std::io::R
                     signed: false,
                     period: Some(("X".into(), period_mm)),
                     detail: format!("period {period_mm:.2} mm"),
+                    record_change: None,
                 });
             }
             Hidden::Reversal { um } => {
@@ -112,6 +114,7 @@ pub(crate) fn write(spec: &Spec, rng: &mut ChaCha8Rng, dir: &Path) -> std::io::R
                     signed: true,
                     period: None,
                     detail: String::new(),
+                    record_change: None,
                 });
             }
             Hidden::ZeroDrift { um_per_min } => {
@@ -125,6 +128,7 @@ pub(crate) fn write(spec: &Spec, rng: &mut ChaCha8Rng, dir: &Path) -> std::io::R
                     signed: true,
                     period: None,
                     detail: "linear drift of the zero".into(),
+                    record_change: None,
                 });
             }
             Hidden::Sawtooth {
@@ -145,6 +149,7 @@ pub(crate) fn write(spec: &Spec, rng: &mut ChaCha8Rng, dir: &Path) -> std::io::R
                     signed: false,
                     period: Some(("X".into(), period_mm)),
                     detail: format!("sawtooth, period {period_mm:.2} mm"),
+                    record_change: None,
                 });
             }
             Hidden::RiseFall { um, peak } => {
@@ -166,6 +171,7 @@ pub(crate) fn write(spec: &Spec, rng: &mut ChaCha8Rng, dir: &Path) -> std::io::R
                     signed: true,
                     period: None,
                     detail: format!("rise and fall of the zero, peak at {tau_s:.0} s"),
+                    record_change: None,
                 });
             }
             _ => return Err(unsupported(Kind::Axis, h)),

@@ -216,6 +216,10 @@ pub struct TrueEffect {
     /// For an effect that repeats along an axis: the axis and the period (mm, or rad for a
     /// rotary axis).
     pub period: Option<(String, f64)>,
+    /// For a drift: the change of its parameter from the first reading to the last, in the
+    /// units of `value` (what the data show of a first-order drift whatever form it is found
+    /// in).
+    pub record_change: Option<f64>,
 }
 
 /// What the generator put into a dataset (kept in memory, never written).

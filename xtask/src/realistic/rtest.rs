@@ -392,6 +392,7 @@ pub(crate) fn write(spec: &Spec, rng: &mut ChaCha8Rng, dir: &Path) -> std::io::R
                     signed: true,
                     period: None,
                     detail: format!("first order, τ = {tau_s:.0} s"),
+                    record_change: None,
                 });
             }
             Hidden::RiseFall { um, peak } => {
@@ -410,6 +411,7 @@ pub(crate) fn write(spec: &Spec, rng: &mut ChaCha8Rng, dir: &Path) -> std::io::R
                         "rise and fall, peak at {:.0} % of the measuring time",
                         100.0 * peak
                     ),
+                    record_change: None,
                 });
             }
             Hidden::AngularPositioning {
@@ -432,6 +434,7 @@ pub(crate) fn write(spec: &Spec, rng: &mut ChaCha8Rng, dir: &Path) -> std::io::R
                     signed: false,
                     period: Some((["B", "C"][rotary].into(), TAU / harmonic as f64)),
                     detail: format!("harmonic {harmonic} of a turn"),
+                    record_change: None,
                 });
             }
             Hidden::BTilt { urad } => {
@@ -445,6 +448,7 @@ pub(crate) fn write(spec: &Spec, rng: &mut ChaCha8Rng, dir: &Path) -> std::io::R
                     signed: true,
                     period: None,
                     detail: String::new(),
+                    record_change: None,
                 });
             }
             Hidden::Squareness { pair, urad } if pair < 3 => {
@@ -458,6 +462,7 @@ pub(crate) fn write(spec: &Spec, rng: &mut ChaCha8Rng, dir: &Path) -> std::io::R
                     signed: false,
                     period: None,
                     detail: String::new(),
+                    record_change: None,
                 });
             }
             _ => return Err(unsupported(spec.kind, h)),
@@ -489,6 +494,7 @@ pub(crate) fn write(spec: &Spec, rng: &mut ChaCha8Rng, dir: &Path) -> std::io::R
         signed: true,
         period: None,
         detail: "ordinary (+ hidden)".into(),
+        record_change: None,
     })
     .collect();
 
@@ -530,6 +536,7 @@ pub(crate) fn write(spec: &Spec, rng: &mut ChaCha8Rng, dir: &Path) -> std::io::R
     let mut csv = String::from("setup,test,t_s,x_mm,y_mm,z_mm,b_deg,c_deg,dx_um,dy_um,dz_um\n");
     let mut setups = Vec::new();
     let mut t = 0.0;
+    let mut t_last = 0.0;
     let mut n_obs = 0;
     for cycle in 0..cycles {
         for (i, (ball, c_deg)) in balls.iter().enumerate() {
@@ -570,10 +577,18 @@ pub(crate) fn write(spec: &Spec, rng: &mut ChaCha8Rng, dir: &Path) -> std::io::R
                     q[0], q[1], q[2], r.x, r.y, r.z
                 );
                 n_obs += 3;
+                t_last = t;
                 t += dt;
             }
         }
         t += rng.random_range(0.0..=600.0);
+    }
+    // The drifts' change from the first reading (t = 0) to the last.
+    // (One true effect per hidden one, in order: any other is refused above.)
+    for (e, h) in effects.iter_mut().zip(&spec.hidden) {
+        if let Hidden::PivotDrift { um, tau_s, .. } = *h {
+            e.record_change = Some(um * 1e-3 * (1.0 - (-t_last / tau_s).exp()));
+        }
     }
     std::fs::write(dir.join("rtest.csv"), csv)?;
     std::fs::write(

@@ -289,6 +289,7 @@ pub(crate) fn write(spec: &Spec, rng: &mut ChaCha8Rng, dir: &Path) -> std::io::R
                         "{} period {period_mm:.2} mm",
                         if saw { "sawtooth" } else { "sine" }
                     ),
+                    record_change: None,
                 });
             }
             Hidden::Squareness { pair, urad } if pair < 3 => {
@@ -302,6 +303,7 @@ pub(crate) fn write(spec: &Spec, rng: &mut ChaCha8Rng, dir: &Path) -> std::io::R
                     signed: false,
                     period: None,
                     detail: String::new(),
+                    record_change: None,
                 });
             }
             Hidden::TrackerScale { ppm } => {
@@ -315,6 +317,7 @@ pub(crate) fn write(spec: &Spec, rng: &mut ChaCha8Rng, dir: &Path) -> std::io::R
                     signed: true,
                     period: None,
                     detail: String::new(),
+                    record_change: None,
                 });
             }
             Hidden::TwoAxis { um } => {
@@ -329,6 +332,7 @@ pub(crate) fn write(spec: &Spec, rng: &mut ChaCha8Rng, dir: &Path) -> std::io::R
                     signed: false,
                     period: None,
                     detail: "Y positioning error changing along X".into(),
+                    record_change: None,
                 });
             }
             _ => return Err(unsupported(Kind::Tracker, h)),
@@ -353,6 +357,7 @@ pub(crate) fn write(spec: &Spec, rng: &mut ChaCha8Rng, dir: &Path) -> std::io::R
             signed: false,
             period: None,
             detail: "ordinary + hidden".into(),
+            record_change: None,
         })
         .collect();
 
