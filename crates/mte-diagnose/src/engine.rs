@@ -157,6 +157,30 @@ pub struct Finding {
     pub exposed_by: Option<String>,
 }
 
+/// A reading the final model misses by far more than the rest: its residual, in units of the
+/// residuals' robust scatter, is beyond what the largest of as many normal residuals reaches at
+/// the discovery level. An isolated one points to a fault of the measurement (a beam break, a
+/// lost lock, a sensor glitch), several at one pose or time to an effect the model lacks.
+#[derive(Debug, Clone, Serialize)]
+pub struct Outlier {
+    /// Row of the observation.
+    pub observation: usize,
+    /// Its set-up (run, station, ball position).
+    pub setup: String,
+    /// Its channel.
+    pub channel: String,
+    /// Where it was taken: each variable's name and value (mm, rad, s or ±1).
+    pub at: Vec<(String, f64)>,
+    /// The same as engineers read it (`X = 53.100 mm, t = 708 s, direction +`).
+    pub place: String,
+    /// The final model's residual, in the observations' unit.
+    pub residual: f64,
+    /// The residual as engineers read it (µm, µrad).
+    pub text: String,
+    /// The residual over the robust scatter of the residuals (studentized).
+    pub z: f64,
+}
+
 /// A candidate (or base parameter) the data cannot separate from the model.
 #[derive(Debug, Clone, Serialize)]
 pub struct NotSeparable {
@@ -458,6 +482,11 @@ pub struct Diagnosis {
     /// Significant structure tests of the extended model's residuals: what nothing in the
     /// library explains.
     pub remaining_structure: Vec<StructureTest>,
+    /// Readings the final model misses by far more than the rest, largest first.
+    pub outliers: Vec<Outlier>,
+    /// σ0 of the final model fitted without the outliers, and its χ² p-value when the noise is
+    /// stated (`None` without outliers).
+    pub without_outliers: Option<(f64, Option<f64>)>,
     /// Gain on data the search did not see (`None` when outer folds are off).
     pub held_out: Option<HeldOut>,
     /// Evidence for plots: one series per finding, or per unexplained structure.
@@ -940,6 +969,16 @@ fn conclude(
     .into_iter()
     .filter(|t| t.is_significant(params.alpha))
     .collect();
+    let outliers = outlying_readings(obs, w, &sol, &fit, params.alpha);
+    let without_outliers = (!outliers.is_empty()).then(|| {
+        let mut w_kept = w.clone();
+        for o in &outliers {
+            w_kept[o.observation] = 0.0;
+        }
+        let kept = solve(&x, &obs.values, &w_kept);
+        let q = quality(obs, &kept, &DVec::zeros(0));
+        (q.sigma0, q.chi2_p_value)
+    });
     let consistent_with_noise = extended.chi2_p_value.is_none_or(|p| p >= params.alpha)
         || extended.sigma0 <= STATED_NOISE_TOLERANCE;
     let verdict = if !remaining_structure.is_empty() || !consistent_with_noise {
@@ -1084,6 +1123,8 @@ fn conclude(
         extended,
         extended_parameters,
         remaining_structure,
+        outliers,
+        without_outliers,
         held_out: None,
         residual_series,
         alpha: params.alpha,
@@ -2791,6 +2832,79 @@ fn compound_drifts(
             });
         }
     }
+    out
+}
+
+/// The readings the final fit (`sol`, `fit`, weights `w`) misses by far more than the rest:
+/// whitened residuals over `√(1 − leverage)`, in units of their robust scatter (1.4826 × the
+/// median absolute deviation, which a few gross errors do not inflate), beyond the two-sided
+/// normal quantile at `alpha` / n — the level at which the largest of n normal residuals would
+/// pass by chance. Largest first.
+fn outlying_readings(
+    obs: &Observations,
+    w: &DVec,
+    sol: &Solution,
+    fit: &Projector,
+    alpha: f64,
+) -> Vec<Outlier> {
+    let h = fit.leverages();
+    let rows: Vec<usize> = (0..obs.len()).filter(|&i| w[i] > 0.0).collect();
+    if rows.len() < 10 {
+        return Vec::new();
+    }
+    let u: Vec<f64> = (0..obs.len())
+        .map(|i| w[i] * sol.residuals[i] / (1.0 - h[i]).max(1e-12).sqrt())
+        .collect();
+    let median = |mut v: Vec<f64>| {
+        v.sort_by(f64::total_cmp);
+        let m = v.len() / 2;
+        if v.len() % 2 == 0 {
+            0.5 * (v[m - 1] + v[m])
+        } else {
+            v[m]
+        }
+    };
+    let centre = median(rows.iter().map(|&i| u[i]).collect());
+    let scatter = 1.4826 * median(rows.iter().map(|&i| (u[i] - centre).abs()).collect());
+    if scatter.is_nan() || scatter <= 0.0 {
+        return Vec::new();
+    }
+    let limit = stats::normal_quantile(1.0 - 0.5 * alpha / rows.len() as f64);
+    let mut out: Vec<Outlier> = rows
+        .iter()
+        .map(|&i| (i, (u[i] - centre) / scatter))
+        .filter(|(_, z)| z.abs() > limit)
+        .map(|(i, z)| Outlier {
+            observation: i,
+            setup: obs.setup_names[obs.setup[i]].clone(),
+            channel: obs.channel_names[obs.channel[i]].clone(),
+            at: obs
+                .variables
+                .iter()
+                .map(|v| (v.name.clone(), v.values[i]))
+                .collect(),
+            place: obs
+                .variables
+                .iter()
+                .map(|v| {
+                    let x = v.values[i];
+                    match v.kind {
+                        VariableKind::LinearAxis => format!("{} = {x:.3} mm", v.name),
+                        VariableKind::RotaryAxis => format!("{} = {:.3}°", v.name, x.to_degrees()),
+                        VariableKind::Time => format!("{} = {x:.0} s", v.name),
+                        VariableKind::Direction => {
+                            format!("{} {}", v.name, if x > 0.0 { "+" } else { "−" })
+                        }
+                    }
+                })
+                .collect::<Vec<_>>()
+                .join(", "),
+            residual: sol.residuals[i],
+            text: crate::report::level(obs.quantity, sol.residuals[i]),
+            z,
+        })
+        .collect();
+    out.sort_by(|a, b| b.z.abs().total_cmp(&a.z.abs()));
     out
 }
 

@@ -835,6 +835,11 @@ impl Projector {
         self.extended(&x.columns(p0, x.ncols() - p0).into_owned())
     }
 
+    /// Each observation's leverage, the diagonal of the whitened hat matrix `Q Qᵀ`.
+    pub fn leverages(&self) -> DVec {
+        DVec::from_fn(self.q.nrows(), |i, _| self.q.row(i).norm_squared())
+    }
+
     /// Weighted residual sum of squares of the model's fit.
     pub fn rss_w(&self) -> f64 {
         self.rw.norm_squared()

@@ -8,7 +8,7 @@ use crate::term::{Quantity, significant_decimals};
 
 /// An RMS, maximum or noise level of the observations as engineers quote it: µm for lengths,
 /// arcsec for angles (a rotary axis' positioning deviations).
-fn level(q: Quantity, v: f64) -> String {
+pub(crate) fn level(q: Quantity, v: f64) -> String {
     let (v, unit) = match q {
         Quantity::Angle => ((v.to_degrees() * 3600.0), "″"),
         _ => (v * 1e3, " µm"),
@@ -18,6 +18,53 @@ fn level(q: Quantity, v: f64) -> String {
         significant_decimals(v.abs() / 10.0).min(3),
         v
     )
+}
+
+/// The readings the final model misses by far more than the rest, where they were taken, and
+/// what the fit is without them.
+fn outliers(s: &mut String, d: &Diagnosis) {
+    const LISTED: usize = 12;
+    if d.outliers.is_empty() {
+        return;
+    }
+    let k = d.outliers.len();
+    let without = d
+        .without_outliers
+        .map(|(sigma0, p)| {
+            format!(
+                " Without {}, σ0 = {sigma0:.2}{}.",
+                if k == 1 { "it" } else { "them" },
+                p.map(|p| format!(" (χ² test {})", p_text(p)))
+                    .unwrap_or_default()
+            )
+        })
+        .unwrap_or_default();
+    let _ = writeln!(
+        s,
+        "**{k} reading{} the model misses by far more than the rest** (|z| beyond what the largest of {} normal residuals reaches at the discovery level; z in units of the residuals' robust scatter). An isolated one points to a fault of the measurement (a beam break, a lost lock, a sensor glitch): check it and measure again or leave it out; several at one pose or time point to an effect the model lacks.{without}\n",
+        if k == 1 { "" } else { "s" },
+        d.observations,
+    );
+    let _ = writeln!(
+        s,
+        "| {} | channel | where | residual | z |\n|---|---|---|---|---|",
+        d.setup_kind
+    );
+    for o in d.outliers.iter().take(LISTED) {
+        let _ = writeln!(
+            s,
+            "| {} | {} | {} | {} | {:.1} |",
+            o.setup, o.channel, o.place, o.text, o.z
+        );
+    }
+    if k > LISTED {
+        let _ = writeln!(
+            s,
+            "\n({} more in `outliers` of diagnosis.json.)",
+            k - LISTED
+        );
+    }
+    let _ = writeln!(s);
 }
 
 /// A p-value as text: "p = 0.012", "p = 3.1e-5", "p < 1e-12".
@@ -132,6 +179,7 @@ pub fn markdown(d: &Diagnosis, title: &str) -> String {
     if !d.findings.is_empty() {
         let _ = writeln!(s);
     }
+    outliers(&mut s, d);
     if let Some(h) = &d.held_out {
         let _ = writeln!(
             s,
@@ -431,6 +479,16 @@ fn unexplained(d: &Diagnosis) -> String {
             "The residuals are {:.1} times the stated noise (σ0, χ² test {}).",
             d.extended.sigma0,
             d.extended.chi2_p_value.map(p_text).unwrap_or_default()
+        ));
+    }
+    if let Some((sigma0, _)) = d.without_outliers {
+        text.push_str(&format!(
+            " Without the {} listed below, σ0 = {sigma0:.2}.",
+            if d.outliers.len() == 1 {
+                "reading".to_string()
+            } else {
+                format!("{} readings", d.outliers.len())
+            }
         ));
     }
     text.trim_end().to_string()
