@@ -51,6 +51,8 @@ pub struct Outcome {
     /// Groups of findings the diagnosis says are one effect of a form no candidate has
     /// ([`mte_diagnose::Diagnosis::compound`]).
     pub compound: usize,
+    /// Readings the diagnosis lists as outliers ([`mte_diagnose::Diagnosis::outliers`]).
+    pub outliers: usize,
     /// The sizes the diagnosis states for such groups where it states one: the findings and
     /// `(value, standard uncertainty)` (a drift's change over the measured time).
     pub compound_sizes: Vec<(Vec<String>, f64, f64)>,
@@ -151,6 +153,7 @@ pub fn run_one(spec: &Spec, index: usize, seed: u64, work: &Path) -> Record {
                 * 1e3,
             verdict: d.verdict,
             compound: d.compound.len(),
+            outliers: d.outliers.len(),
             compound_sizes: d
                 .compound
                 .iter()
@@ -244,6 +247,8 @@ pub struct FdrSummary {
     pub with_finding: usize,
     /// Datasets whose verdict is "no significant discrepancy".
     pub no_discrepancy: usize,
+    /// Datasets where the diagnosis lists a reading as an outlier (clean data have none).
+    pub with_outlier: usize,
     /// Finding names by frequency (datasets naming them).
     pub names: Vec<(String, usize)>,
     /// Quantiles of σ0 of the extended fit (min, 10 %, median, 90 %, max).
@@ -302,6 +307,7 @@ pub fn fdr_with(kind: Kind, n: usize, base_seed: u64, base_model: &BaseModel) ->
             .iter()
             .filter(|(_, o)| o.verdict == mte_diagnose::Verdict::NoDiscrepancy)
             .count(),
+        with_outlier: ok.iter().filter(|(_, o)| o.outliers > 0).count(),
         names: name_counts(
             ok.iter()
                 .flat_map(|(_, o)| o.findings.iter().map(|f| f.name.as_str())),
@@ -981,8 +987,10 @@ R-test practice (`tests/rtest.rs` in mte-diagnose).\n",
 Clean = ordinary errors only (no reversal on axis data). A dataset counts as a false discovery \
 when the diagnosis reports any finding; the verdict column counts \"no significant discrepancy\" \
 (the rest of the datasets without a finding are reported as unexplained structure). Completions \
-of the base's component errors are not findings.\n\n\
-| kind | datasets | errors | with a finding | verdict \"no significant discrepancy\" | most frequent findings | σ0 (min / 10 % / median / 90 % / max) | held-out RMS ÷ σ, base → diagnosed (median) |\n|---|---|---|---|---|---|---|---|"
+of the base's component errors are not findings. *with a reading listed as an outlier*: the \
+report lists a reading the final model misses by far more than the rest (the generators write \
+none).\n\n\
+| kind | datasets | errors | with a finding | verdict \"no significant discrepancy\" | with a reading listed as an outlier | most frequent findings | σ0 (min / 10 % / median / 90 % / max) | held-out RMS ÷ σ, base → diagnosed (median) |\n|---|---|---|---|---|---|---|---|---|"
         );
         for f in &r.fdr {
             let q = f.sigma0.map_or("–".into(), |q| {
@@ -996,12 +1004,13 @@ of the base's component errors are not findings.\n\n\
                 .map_or("–".into(), |(a, b)| format!("{a:.2} → {b:.2}"));
             let _ = writeln!(
                 s,
-                "| {} | {} | {} | {} | {} | {} | {q} | {h} |",
+                "| {} | {} | {} | {} | {} | {} | {} | {q} | {h} |",
                 f.kind.name(),
                 f.n,
                 f.errors,
                 pct(f.with_finding, f.n - f.errors),
                 pct(f.no_discrepancy, f.n - f.errors),
+                pct(f.with_outlier, f.n - f.errors),
                 top(&f.names, 5)
             );
         }
