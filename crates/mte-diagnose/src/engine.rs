@@ -3224,11 +3224,23 @@ fn period_modes(
             _ => None,
         })
         .collect();
+    // A period whose sine and cosine the rest of the model nearly holds has no determined
+    // amplitude (it would take any size at no cost): not a rival mode (a reduction of zero).
+    let determined = |inc: &Increment, t: &Term| {
+        inc.new_rank == t.width() && inc.separability >= SEPARABILITY_TOLERANCE
+    };
     let increments = projector.increments(grid.len(), |i| Cow::Borrowed(&grid[i].1.columns));
     let profile: Vec<(f64, f64, Term)> = grid
         .into_iter()
         .zip(increments)
-        .map(|((period, t), inc)| (period, inc.delta_rss, t))
+        .map(|((period, t), inc)| {
+            let d = if determined(&inc, &t) {
+                inc.delta_rss
+            } else {
+                0.0
+            };
+            (period, d, t)
+        })
         .collect();
     // Local optima on the grid, away from the chosen period, the best few refined between their
     // grid neighbours (a grid point can sit half a step off its optimum).
@@ -3248,7 +3260,12 @@ fn period_modes(
             match candidate.refine(i, &score) {
                 Some(r) => match r.family {
                     Family::Periodic { period } => {
-                        let d = projector.increment(&r.columns).delta_rss;
+                        let inc = projector.increment(&r.columns);
+                        let d = if determined(&inc, &r) {
+                            inc.delta_rss
+                        } else {
+                            0.0
+                        };
                         (period, d, r)
                     }
                     _ => (*q, *d, t.clone()),
