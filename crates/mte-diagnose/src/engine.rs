@@ -885,11 +885,16 @@ fn conclude(
     // amplitude's uncertainty and are named. (A long record samples densely: not needed there.)
     let mut ambiguity_notes = Vec::new();
     if thinned.is_none() {
-        let mut col = base.iter().map(Term::width).sum::<usize>();
         for (k, c) in chosen.iter().enumerate() {
-            let width = c.term.width();
-            let modes = period_modes(obs, w, &x, &sol, col, &c.term, searcher.chosen_candidate(c));
-            col += width;
+            let modes = period_modes(
+                obs,
+                w,
+                &x,
+                &sol,
+                offsets[k],
+                &c.term,
+                searcher.chosen_candidate(c),
+            );
             let Some(h) = findings[k]
                 .hyper_parameter
                 .clone()
