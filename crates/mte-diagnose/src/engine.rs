@@ -881,6 +881,14 @@ fn conclude(
     for (k, f) in findings.iter_mut().enumerate() {
         f.estimates.extend(change(&[k]));
     }
+    // A drift the data cannot tell from two others together.
+    for (k, c) in chosen.iter().enumerate() {
+        findings[k].alternatives.extend(
+            equivalent_drifts(obs, w, &x, offsets[k], &c.term, candidates)
+                .into_iter()
+                .map(|(a, b)| format!("{a} and {b} together (same time dependence)")),
+        );
+    }
     // A period the positions cannot pin down: other periods that fit about as well widen the
     // amplitude's uncertainty and are named. (A long record samples densely: not needed there.)
     let mut ambiguity_notes = Vec::new();
@@ -1366,15 +1374,42 @@ impl Pool {
             .collect()
     }
 
-    /// The products of the model design `x` with every variant under weights `w`, given those
-    /// of its first columns `fixed` (rows of `Xᵀ W² C`, [`Pool::search_products`]).
-    fn model_products(&self, fixed: &DMat, x: &DMat, w: &DVec) -> DMat {
-        let p0 = fixed.nrows();
-        let extra = x.columns(p0, x.ncols() - p0).into_owned();
-        let e = weighted_products(&extra, &w.component_mul(w), &self.column_blocks());
-        let mut out = DMat::zeros(x.ncols(), fixed.ncols());
-        out.rows_mut(0, p0).copy_from(fixed);
-        out.rows_mut(p0, e.nrows()).copy_from(&e);
+    /// The products of the model's design with every variant under weights `w`: those of its
+    /// first columns `fixed` (rows of `Xᵀ W² C`, [`Pool::search_products`]), then those of the
+    /// terms `beyond` them. A term's rows are kept in `formed` (by its columns) and read again
+    /// at the search's next steps: only the terms a step adds or a refinement changed are formed,
+    /// together in one pass over the variants.
+    fn model_products(
+        &self,
+        fixed: &DMat,
+        beyond: &[Term],
+        w: &DVec,
+        formed: &mut Vec<(DMat, DMat)>,
+    ) -> DMat {
+        let known =
+            |formed: &[(DMat, DMat)], t: &Term| formed.iter().position(|(c, _)| *c == t.columns);
+        let new: Vec<&Term> = beyond
+            .iter()
+            .filter(|t| known(formed, t).is_none())
+            .collect();
+        if !new.is_empty() {
+            let columns = design(&new, w.len());
+            let rows = weighted_products(&columns, &w.component_mul(w), &self.column_blocks());
+            let mut at = 0;
+            for t in new {
+                formed.push((t.columns.clone(), rows.rows(at, t.width()).into_owned()));
+                at += t.width();
+            }
+        }
+        let p = fixed.nrows() + beyond.iter().map(Term::width).sum::<usize>();
+        let mut out = DMat::zeros(p, fixed.ncols());
+        out.rows_mut(0, fixed.nrows()).copy_from(fixed);
+        let mut at = fixed.nrows();
+        for t in beyond {
+            let rows = &formed[known(formed, t).expect("formed above")].1;
+            out.rows_mut(at, rows.nrows()).copy_from(rows);
+            at += rows.nrows();
+        }
         out
     }
 
@@ -1667,6 +1702,8 @@ impl Searcher<'_> {
         let products =
             self.pool
                 .search_products(&self.base[self.pool.base_terms..], &x, w, held_out);
+        // The products of the terms beyond the base with every variant ([`Pool::model_products`]).
+        let mut formed = Vec::new();
         // Variants whose columns a refinement changed (not the pool's: no products).
         let mut refined: std::collections::HashSet<(usize, usize)> = Default::default();
 
@@ -1688,7 +1725,12 @@ impl Searcher<'_> {
             let rss = projector.rss_w();
             // Every variant's `Qᵀ W c`, from the products; a variant a refinement changed is
             // projected directly.
-            let qc = projector.basis_products(&self.pool.model_products(&products.x, &x, w));
+            let qc = projector.basis_products(&self.pool.model_products(
+                &products.x,
+                &terms[self.base.len()..],
+                w,
+                &mut formed,
+            ));
             let qty = projector.basis_of(y);
             let increment = |ci: usize, vi: usize, t: &Term| {
                 if refined.contains(&(ci, vi)) {
@@ -2911,6 +2953,89 @@ fn outlying_readings(
         .collect();
     out.sort_by(|a, b| b.z.abs().total_cmp(&a.z.abs()));
     out
+}
+
+/// Share of a drift's own effect (what the rest of the final model does not hold) that two other
+/// drifts together may leave for the three to give the same readings: an identity of the
+/// machine's geometry on these poses, not a near miss of the data.
+const EQUIVALENT_DRIFT_SHARE: f64 = 1e-9;
+
+/// Most pairs of drifts [`equivalent_drifts`] names.
+const EQUIVALENT_PAIRS: usize = 3;
+
+/// Pairs of drifts of other parameters, with the same time dependence, that together give the
+/// readings the drift finding `term` gives (columns `col..` of the final design `x`, weights
+/// `w`): beyond the rest of the model, all but [`EQUIVALENT_DRIFT_SHARE`] of its effect is
+/// theirs, and neither alone holds it. On an R-test the ball sees only the tool relative to the
+/// table: the lines of both rotary axes drifting together in X are the tool drifting the other
+/// way. The pairs' names, in the library's order, at most [`EQUIVALENT_PAIRS`].
+fn equivalent_drifts(
+    obs: &Observations,
+    w: &DVec,
+    x: &DMat,
+    col: usize,
+    term: &Term,
+    candidates: &[Box<dyn Candidate>],
+) -> Vec<(String, String)> {
+    let Family::Drift { time_constant_s } = term.family else {
+        return Vec::new();
+    };
+    let same_form = |t: &Term| {
+        t.name != term.name
+            && matches!(t.family, Family::Drift { time_constant_s: tc } if tc == time_constant_s)
+    };
+    // Every other drift cause with the finding's time dependence.
+    let others: Vec<Term> = candidates
+        .iter()
+        .filter(|c| c.role() == Role::Cause)
+        .filter_map(|c| match time_constant_s {
+            Some(tau) => c.at(0, tau),
+            None => (c.columns(obs) == 1)
+                .then(|| c.variants(obs).pop())
+                .flatten(),
+        })
+        .filter(|t| t.width() == 1 && same_form(t))
+        .collect();
+    if others.len() < 2 || term.width() != 1 {
+        return Vec::new();
+    }
+    let (n, p) = x.shape();
+    let rest = DMat::from_fn(n, p - 1, |i, j| x[(i, if j < col { j } else { j + 1 })]);
+    let projector = Projector::fit(&rest, &obs.values, w);
+    let mut d = DMat::zeros(n, others.len() + 1);
+    d.set_column(0, &term.columns.column(0));
+    for (k, t) in others.iter().enumerate() {
+        d.set_column(k + 1, &t.columns.column(0));
+    }
+    // Beyond the rest of the model: the finding's effect (column 0) and each other drift's.
+    let r = projector.residual_part(&d);
+    let g = crate::fit::tr_mul(&r, &r);
+    let own = g[(0, 0)];
+    if own <= 0.0 {
+        return Vec::new();
+    }
+    let tolerance = EQUIVALENT_DRIFT_SHARE * own;
+    // What is left of the finding's effect after the best multiple of `a`, of `a` and `b`.
+    let left_by_one = |a: usize| own - g[(a, 0)].powi(2) / g[(a, a)].max(1e-300);
+    let left_by_two = |a: usize, b: usize| {
+        let det = g[(a, a)] * g[(b, b)] - g[(a, b)].powi(2);
+        if det <= 1e-12 * g[(a, a)] * g[(b, b)] {
+            return own;
+        }
+        let ca = (g[(b, b)] * g[(a, 0)] - g[(a, b)] * g[(b, 0)]) / det;
+        let cb = (g[(a, a)] * g[(b, 0)] - g[(a, b)] * g[(a, 0)]) / det;
+        own - ca * g[(a, 0)] - cb * g[(b, 0)]
+    };
+    let m = others.len();
+    let alone: Vec<bool> = (0..=m)
+        .map(|a| a > 0 && left_by_one(a) > tolerance)
+        .collect();
+    (1..=m)
+        .flat_map(|a| (a + 1..=m).map(move |b| (a, b)))
+        .filter(|&(a, b)| alone[a] && alone[b] && left_by_two(a, b) < tolerance)
+        .take(EQUIVALENT_PAIRS)
+        .map(|(a, b)| (others[a - 1].name.clone(), others[b - 1].name.clone()))
+        .collect()
 }
 
 /// A note for each first-order drift whose time constant is the shortest its candidate searches

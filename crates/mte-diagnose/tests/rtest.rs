@@ -414,3 +414,59 @@ fn one_ball_position_cannot_separate_the_b_axis_tilt() {
     assert!(!f.alternatives.is_empty(), "{report}");
     assert!(report.contains("second ball position"), "{report}");
 }
+
+#[test]
+fn both_rotary_lines_drifting_together_are_one_drift_whose_pair_is_named() {
+    // The B and the C line both drift along X at 0.2 µm/min: the ball sees one drift, which a
+    // drift of either line with another parameter's, at the same rate, reproduces exactly.
+    let rate_mm_per_s = 0.2e-3 / 60.0;
+    let mut errors = pivots();
+    errors.extend(b_pivot_shift(0, move |t| rate_mm_per_s * t));
+    errors.extend([
+        Injected {
+            slot: "C.position.dx",
+            value: Box::new(move |t| rate_mm_per_s * t),
+        },
+        Injected {
+            slot: "workpiece.position.dx",
+            value: Box::new(move |t| -rate_mm_per_s * t),
+        },
+    ]);
+    let d = run(&write_dataset(
+        "two-drifts",
+        &one_position(),
+        &errors,
+        6,
+        23,
+    ));
+    let report = mte_diagnose::report::markdown(&d, "two drifts");
+    let drifts: Vec<_> = d
+        .findings
+        .iter()
+        .filter(|f| f.name.contains("drift"))
+        .collect();
+    let [finding] = drifts[..] else {
+        panic!("one drift expected: {report}");
+    };
+    // The pair that drifted is named: as the finding with an alternative, or as an alternative.
+    let told = |a: &str| {
+        a.contains("together")
+            && (a.contains("EX0B") && a.contains("EX0C")
+                || finding.name.contains("EX0B") && a.contains("EX0C")
+                || finding.name.contains("EX0C") && a.contains("EX0B"))
+    };
+    assert!(finding.alternatives.iter().any(|a| told(a)), "{report}");
+    // Its size: the change from the first reading to the last (6 cycles of 86 readings, 4 s
+    // apart), in magnitude (a drift of the tool is the lines' the other way).
+    let change = finding
+        .estimates
+        .iter()
+        .find(|e| e.name.ends_with("change over the measured time"))
+        .expect("a drift states its change");
+    let truth = rate_mm_per_s * (6.0 * 86.0 - 1.0) * 4.0;
+    assert!(
+        (change.value.abs() - truth).abs() <= 2.0 * change.uncertainty,
+        "{} vs {truth}: {report}",
+        change.text
+    );
+}
