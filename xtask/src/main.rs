@@ -1,7 +1,7 @@
 //! `cargo xtask reproduce [seed000|seed002|seed003|seed004|all] [--check]`,
 //! `cargo xtask reproduce seed003 --timing` (writes `docs/reproduction/seed003-timing.md`) and
 //! `cargo xtask bench [-- criterion args]` and
-//! `cargo xtask study [fdr|power|coverage|openworld|all] [--n N] [--n-power M] [--seed S] [--kind axis|tracker|rtest|rtest-head|points] [--base-model omit] [--out FILE]`.
+//! `cargo xtask study [fdr|power|coverage|combined|openworld|all] [--n N] [--n-power M] [--seed S] [--kind axis|tracker|rtest|rtest-head|points] [--base-model omit] [--out FILE]`.
 //!
 //! The generators are in the library target (`xtask::reproduce`), so the staleness test in
 //! `tests/reproduction_up_to_date.rs` runs the very same code.
@@ -9,7 +9,7 @@
 use std::process::{Command, ExitCode};
 use xtask::reproduce::{self, Freshness, PAPERS};
 
-const USAGE: &str = "usage: cargo xtask <reproduce [seed000|seed002|seed003|seed004|all] [--check] | reproduce seed003 --timing | bench [-- criterion args] | bench-diagnose [--rows N] [--seed S] | study [fdr|power|coverage|openworld|all] [--n N] [--n-power M] [--seed S] [--kind axis|tracker|rtest|rtest-head|points] [--base-model omit] [--out FILE]>";
+const USAGE: &str = "usage: cargo xtask <reproduce [seed000|seed002|seed003|seed004|all] [--check] | reproduce seed003 --timing | bench [-- criterion args] | bench-diagnose [--rows N] [--seed S] | study [fdr|power|coverage|combined|openworld|all] [--n N] [--n-power M] [--seed S] [--kind axis|tracker|rtest|rtest-head|points] [--base-model omit] [--out FILE]>";
 
 /// `cargo xtask realistic <axis|tracker|rtest|rtest-head|points> <seed> <dir> [--hidden EFFECT SIZE]
 /// [--cycles N] [--targets N]`: writes one realistic dataset (every ordinary error) for trying
@@ -236,7 +236,9 @@ fn run_study(args: &[String]) -> Result<(), String> {
             recorded.extend([a.to_string(), v]);
         } else {
             match a {
-                "fdr" | "power" | "coverage" | "openworld" | "all" => which = a.to_string(),
+                "fdr" | "power" | "coverage" | "combined" | "openworld" | "all" => {
+                    which = a.to_string()
+                }
                 other => return Err(format!("unknown argument `{other}`\n{USAGE}")),
             }
             recorded.push(a.to_string());
@@ -285,6 +287,20 @@ fn run_study(args: &[String]) -> Result<(), String> {
                 n,
                 seed,
                 &studies::user_model_lacking(kind, effect),
+            ));
+        }
+    }
+    if which == "combined" || which == "all" {
+        for (kind, effects) in studies::combined_plan()
+            .into_iter()
+            .filter(|c| kinds.contains(&c.0))
+        {
+            report.combined.push(studies::combined(
+                kind,
+                &effects,
+                n_power,
+                seed,
+                &base_model,
             ));
         }
     }

@@ -867,6 +867,175 @@ pub fn openworld_with(
     s
 }
 
+/// The cells of the combined study: several effects hidden in each dataset at once, with their
+/// sizes. A second effect of one family goes to the next axis ([`combined_hidden`]): a second
+/// pitch is Y's, a second pivot drift the C line's.
+pub fn combined_plan() -> Vec<(Kind, Vec<(Effect, f64)>)> {
+    vec![
+        (
+            Kind::Axis,
+            vec![
+                (Effect::Pitch, 2.0),
+                (Effect::Reversal, 1.0),
+                (Effect::ZeroDrift, 0.1),
+            ],
+        ),
+        (
+            Kind::Tracker,
+            vec![(Effect::Pitch, 2.0), (Effect::Pitch, 2.0)],
+        ),
+        (
+            Kind::Rtest,
+            vec![(Effect::PivotDrift, 10.0), (Effect::PivotDrift, 10.0)],
+        ),
+    ]
+}
+
+/// The hidden effects of a combined cell, their other parameters drawn from `rng`: the k-th
+/// effect of one family on the k-th axis (pitch: X, Y, Z; pivot drift: B, C).
+pub fn combined_hidden(effects: &[(Effect, f64)], rng: &mut impl Rng) -> Vec<Hidden> {
+    effects
+        .iter()
+        .enumerate()
+        .map(|(k, &(effect, size))| {
+            let before = effects[..k].iter().filter(|(e, _)| *e == effect).count();
+            let mut h = effect.hidden(size, rng);
+            match &mut h {
+                Hidden::Pitch { axis, .. } => *axis = before,
+                Hidden::PivotDrift { rotary, .. } => *rotary = before,
+                _ => {}
+            }
+            h
+        })
+        .collect()
+}
+
+/// Several effects hidden at once in each dataset.
+#[derive(Debug, Clone)]
+pub struct CombinedCell {
+    /// Kind of dataset.
+    pub kind: Kind,
+    /// The effects and their sizes ([`combined_hidden`]).
+    pub effects: Vec<(Effect, f64)>,
+    /// Datasets run.
+    pub n: usize,
+    /// Load / diagnosis errors.
+    pub errors: usize,
+    /// Datasets with every effect named right.
+    pub all_named: usize,
+    /// Effects, over all datasets, named right by a finding.
+    pub effects_named: usize,
+    /// Effects not named right that a finding's not-separable alternatives name.
+    pub effects_as_alternative: usize,
+    /// Effects neither named nor an alternative, whose period the report says the sampling
+    /// cannot show ([`stated_out_of_reach`]).
+    pub effects_out_of_reach: usize,
+    /// Of the effects named right, those whose size lies within 2 u of the truth (for a drift,
+    /// its change over the measured time, [`change_matches`]; else [`estimate_matches`]).
+    pub within_2u: usize,
+    /// Datasets whose every finding names one of the effects.
+    pub no_other: usize,
+    /// Datasets with every effect named right, no other finding, and the verdict that the causes
+    /// found explain the data.
+    pub all_alone_explained: usize,
+    /// Most frequent finding names.
+    pub names: Vec<(String, usize)>,
+}
+
+impl CombinedCell {
+    /// The effects as the page names them (`periodic pitch of X 2 µm + …`).
+    pub fn label(&self) -> String {
+        self.effects
+            .iter()
+            .enumerate()
+            .map(|(k, &(e, size))| {
+                let before = self.effects[..k].iter().filter(|(f, _)| *f == e).count();
+                let name = match (e, before) {
+                    (Effect::Pitch, 1) => "periodic pitch of Y",
+                    (Effect::Pitch, 2) => "periodic pitch of Z",
+                    (Effect::PivotDrift, 1) => "thermal drift of EX0C",
+                    _ => e.name(),
+                };
+                format!("{name} {size} {}", e.unit())
+            })
+            .collect::<Vec<_>>()
+            .join(" + ")
+    }
+}
+
+/// `n` datasets of `kind` with every effect of `effects` at once, diagnosed against
+/// `base_model` (the study's: the user's model of a real machine, [`BaseModel::Default`]).
+pub fn combined(
+    kind: Kind,
+    effects: &[(Effect, f64)],
+    n: usize,
+    base_seed: u64,
+    base_model: &BaseModel,
+) -> CombinedCell {
+    let tag: Vec<String> = effects.iter().map(|(e, s)| format!("{e:?}-{s}")).collect();
+    let cell = format!("combined-{}-{}", kind.name(), tag.join("-"));
+    let records = run_cell(&cell, n, base_seed, |rng| {
+        let mut s = Spec::new(kind, &combined_hidden(effects, rng));
+        s.base_model = base_model.clone();
+        s
+    });
+    let mut c = CombinedCell {
+        kind,
+        effects: effects.to_vec(),
+        n,
+        errors: 0,
+        all_named: 0,
+        effects_named: 0,
+        effects_as_alternative: 0,
+        effects_out_of_reach: 0,
+        within_2u: 0,
+        no_other: 0,
+        all_alone_explained: 0,
+        names: Vec::new(),
+    };
+    let mut all_names = Vec::new();
+    for r in &records {
+        let Ok(o) = &r.outcome else {
+            c.errors += 1;
+            continue;
+        };
+        if r.effects.len() != effects.len() {
+            c.errors += 1;
+            continue;
+        }
+        let mut named = 0;
+        for truth in &r.effects {
+            if let Some(f) = o.findings.iter().find(|f| names_effect(truth, &f.name)) {
+                named += 1;
+                let sized = change_matches(truth, f, o, 2.0)
+                    .unwrap_or_else(|| estimate_matches(truth, f, 2.0));
+                c.within_2u += usize::from(sized);
+            } else if o
+                .findings
+                .iter()
+                .any(|f| f.alternatives.iter().any(|a| names_effect(truth, a)))
+            {
+                c.effects_as_alternative += 1;
+            } else {
+                c.effects_out_of_reach += usize::from(stated_out_of_reach(truth, o));
+            }
+        }
+        c.effects_named += named;
+        let all = named == r.effects.len();
+        c.all_named += usize::from(all);
+        let no_other = o
+            .findings
+            .iter()
+            .all(|f| r.effects.iter().any(|t| names_effect(t, &f.name)));
+        c.no_other += usize::from(no_other);
+        c.all_alone_explained +=
+            usize::from(all && no_other && o.verdict == mte_diagnose::Verdict::Explained);
+        all_names.extend(o.findings.iter().map(|f| f.name.clone()));
+    }
+    c.names = name_counts(all_names.iter().map(String::as_str));
+    c
+}
+
 fn power_table(s: &mut String, cells: &[PowerCell]) {
     let _ = writeln!(
         s,
@@ -913,6 +1082,8 @@ pub struct StudyReport {
     pub coverage: Vec<PowerCell>,
     /// Open-world summaries.
     pub openworld: Vec<OpenWorldSummary>,
+    /// Cells of several effects at once.
+    pub combined: Vec<CombinedCell>,
 }
 
 fn pct(k: usize, n: usize) -> String {
@@ -1086,6 +1257,52 @@ which the report says are one drift of neither form), and its first minutes are 
 stated change — the report's note says that the drift may be faster and its change larger.\n"
         );
         power_table(&mut s, &r.coverage);
+    }
+    if !r.combined.is_empty() {
+        let _ = writeln!(
+            s,
+            "## Several effects at once\n\n\
+Every effect of a cell hidden in each dataset together, on top of the ordinary errors, against \
+the user's model of a real machine (no power cell's `except`: none of these effects is in it). A \
+second effect of one family sits on the next axis: the tracker's second pitch is Y's, the \
+R-test's second pivot drift the C line's (`EX0C`), each with its own period or time constant \
+and sign. *every effect named*: datasets where a finding names each effect \
+(`names_effect`, as in the power table); *effects named*: of all hidden effects; *else \
+reported as not separable*: of the effects not named, those a finding's alternatives name — on \
+an R-test the lines of B and C drifting together in X are the tool drifting the other way, and \
+the report says which drifts together give the same readings; *else period stated out of reach*: of the effects neither named nor an alternative, those whose \
+period the report says the sampling cannot show (a tracker grid of 5–7 positions along the \
+axis, as in the power table); *within 2 u*: of the effects \
+named, |estimate − truth| ≤ 2 u (a drift's change over the measured time, else as in the power \
+table); *no other finding*: datasets whose every finding names one of the effects; *all named \
+alone, explained*: every effect named, no other finding, and the verdict that the causes found \
+explain the data.\n\n\
+| kind | effects | datasets | errors | every effect named | effects named | else reported as not separable | else period stated out of reach | within 2 u | no other finding | all named alone, explained | most frequent findings |\n|---|---|---|---|---|---|---|---|---|---|---|---|"
+        );
+        for c in &r.combined {
+            let ran = c.n - c.errors;
+            let effects = ran * c.effects.len();
+            let _ = writeln!(
+                s,
+                "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |",
+                c.kind.name(),
+                c.label(),
+                c.n,
+                c.errors,
+                pct(c.all_named, ran),
+                pct(c.effects_named, effects),
+                pct(c.effects_as_alternative, effects - c.effects_named),
+                pct(
+                    c.effects_out_of_reach,
+                    effects - c.effects_named - c.effects_as_alternative
+                ),
+                pct(c.within_2u, c.effects_named),
+                pct(c.no_other, ran),
+                pct(c.all_alone_explained, ran),
+                top(&c.names, 4)
+            );
+        }
+        s.push('\n');
     }
     if !r.openworld.is_empty() {
         let _ = writeln!(

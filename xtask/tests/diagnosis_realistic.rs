@@ -297,3 +297,29 @@ fn a_component_held_by_another_leaves_and_the_one_that_stays_is_found_again_alon
         d.notes
     );
 }
+
+#[test]
+fn a_pitch_a_reversal_and_a_drift_at_once_are_each_named_and_nothing_else() {
+    let (kind, effects) = studies::combined_plan()
+        .into_iter()
+        .find(|c| c.0 == Kind::Axis)
+        .expect("an axis cell");
+    let c = studies::combined(
+        kind,
+        &effects,
+        6,
+        SEED,
+        &xtask::realistic::BaseModel::Default,
+    );
+    assert_eq!(c.errors, 0);
+    assert_eq!(c.all_named, c.n, "{}: {:?}", c.label(), c.names);
+    assert_eq!(c.no_other, c.n, "{}: {:?}", c.label(), c.names);
+    // Of 18 sizes, at 95 % coverage 3 or more outside 2 u happen with probability 0.06.
+    assert!(
+        c.within_2u + 2 >= c.effects_named,
+        "{}: {} of {} within 2 u",
+        c.label(),
+        c.within_2u,
+        c.effects_named
+    );
+}
