@@ -22,6 +22,16 @@ pub(crate) fn level(q: Quantity, v: f64) -> String {
 
 /// The readings the final model misses by far more than the rest, where they were taken, and
 /// what the fit is without them.
+/// `σ0 = …` against a stated noise; without one σ0 is the residuals' scatter in the data's unit
+/// (unit weights), said as such.
+fn scatter(d: &Diagnosis, sigma0: f64) -> String {
+    if d.stated_noise.is_some() {
+        format!("σ0 = {sigma0:.2}")
+    } else {
+        format!("the residual scatter is {}", level(d.quantity, sigma0))
+    }
+}
+
 fn outliers(s: &mut String, d: &Diagnosis) {
     const LISTED: usize = 12;
     if d.outliers.is_empty() {
@@ -32,8 +42,9 @@ fn outliers(s: &mut String, d: &Diagnosis) {
         .without_outliers
         .map(|(sigma0, p)| {
             format!(
-                " Without {}, σ0 = {sigma0:.2}{}.",
+                " Without {}, {}{}.",
                 if k == 1 { "it" } else { "them" },
+                scatter(d, sigma0),
                 p.map(|p| format!(" (χ² test {})", p_text(p)))
                     .unwrap_or_default()
             )
@@ -96,7 +107,16 @@ pub fn markdown(d: &Diagnosis, title: &str) -> String {
         if d.setups.len() == 1 { "" } else { "s" }
     );
     let _ = writeln!(s, "## Verdict\n");
+    // Without a stated noise the residuals' size is not tested (σ0 is then their RMS in the
+    // unit of the weights): only their structure is.
+    let stated = d.stated_noise.is_some();
     let noise_fit = |q: &crate::engine::FitQuality| {
+        if !stated {
+            return format!(
+                "residual RMS {}; no noise stated, so their size is not tested",
+                level(d.quantity, q.rms)
+            );
+        }
         format!(
             "σ0 = {:.2}{}",
             q.sigma0,
@@ -106,7 +126,7 @@ pub fn markdown(d: &Diagnosis, title: &str) -> String {
         )
     };
     match d.verdict {
-        Verdict::NoDiscrepancy => {
+        Verdict::NoDiscrepancy if stated => {
             let _ = writeln!(
                 s,
                 "**No significant discrepancy.** The base model explains the data to the noise: residual RMS {}, {}.\n",
@@ -114,13 +134,25 @@ pub fn markdown(d: &Diagnosis, title: &str) -> String {
                 noise_fit(&d.base)
             );
         }
+        Verdict::NoDiscrepancy => {
+            let _ = writeln!(
+                s,
+                "**No significant discrepancy.** The base model leaves no structure in the residuals ({}).\n",
+                noise_fit(&d.base)
+            );
+        }
         Verdict::Explained => {
             let _ = writeln!(
                 s,
-                "**The base model misses {} cause{}**, named below; with {} the residuals are consistent with the noise ({}).\n",
+                "**The base model misses {} cause{}**, named below; with {} the residuals are {} ({}).\n",
                 d.findings.len(),
                 if d.findings.len() == 1 { "" } else { "s" },
                 if d.findings.len() == 1 { "it" } else { "them" },
+                if stated {
+                    "consistent with the noise"
+                } else {
+                    "left without structure"
+                },
                 noise_fit(&d.extended)
             );
         }
@@ -483,12 +515,13 @@ fn unexplained(d: &Diagnosis) -> String {
     }
     if let Some((sigma0, _)) = d.without_outliers {
         text.push_str(&format!(
-            " Without the {} listed below, σ0 = {sigma0:.2}.",
+            " Without the {} listed below, {}.",
             if d.outliers.len() == 1 {
                 "reading".to_string()
             } else {
                 format!("{} readings", d.outliers.len())
-            }
+            },
+            scatter(d, sigma0)
         ));
     }
     text.trim_end().to_string()

@@ -416,6 +416,35 @@ fn one_ball_position_cannot_separate_the_b_axis_tilt() {
 }
 
 #[test]
+fn a_drift_of_the_c_line_under_a_table_that_stays_is_found_as_the_absolute_location() {
+    // The C line drifts along X at 0.2 µm/min while the table top keeps its place at C = 0 (the
+    // C body +δ, the workpiece −δ): a line that moves under what it carries, which a drift of
+    // the C body (the table moving with its line) does not describe.
+    let rate_mm_per_s = 0.2e-3 / 60.0;
+    let mut errors = pivots();
+    errors.extend([
+        Injected {
+            slot: "C.position.dx",
+            value: Box::new(move |t| rate_mm_per_s * t),
+        },
+        Injected {
+            slot: "workpiece.position.dx",
+            value: Box::new(move |t| -rate_mm_per_s * t),
+        },
+    ]);
+    let d = run(&write_dataset("c-drift", &one_position(), &errors, 6, 31));
+    let report = mte_diagnose::report::markdown(&d, "C line drift");
+    assert_eq!(names(&d), vec!["EX0C abs drift".to_string()], "{report}");
+    let e = &d.findings[0].estimates[0];
+    assert!(
+        (e.value - rate_mm_per_s).abs() <= 2.0 * e.uncertainty,
+        "{} vs {rate_mm_per_s}",
+        e.text
+    );
+    assert!(d.verdict == mte_diagnose::Verdict::Explained, "{report}");
+}
+
+#[test]
 fn both_rotary_lines_drifting_together_are_one_drift_whose_pair_is_named() {
     // The B and the C line both drift along X at 0.2 µm/min: the ball sees one drift, which a
     // drift of either line with another parameter's, at the same rate, reproduces exactly.

@@ -232,7 +232,7 @@ pub(crate) fn slot_effects(
         }
         if let (Some(axis), SlotKind::Position) = (axis, slot.kind) {
             if let Some(child) =
-                rotary_child(machine, slot.body).filter(|_| axis.kind == AxisKind::Rotary)
+                carried_in_place(machine, slot.body).filter(|_| axis.kind == AxisKind::Rotary)
             {
                 let col = absolute_location_column(machine, s, slot.body, child, c);
                 let reference = reference.as_ref().and_then(|own| {
@@ -245,15 +245,18 @@ pub(crate) fn slot_effects(
                     })
                 });
                 if let Some(col) = col.filter(|c| c.amax() > 1e-12) {
-                    let carried = &machine.bodies()[child].name;
+                    let carried = match machine.axis_moving(child) {
+                        Some(_) => format!("{} axis", machine.bodies()[child].name),
+                        None => machine.bodies()[child].name.clone(),
+                    };
                     out.push(SlotEffect {
                         name: format!("{} abs", name.name),
                         label: format!(
-                            "{} with the {carried} axis kept in place (absolute)",
+                            "{} with the {carried} kept in place (absolute)",
                             name.label
                         ),
                         meaning: format!(
-                            "{}; the {carried} axis it carries keeps its own place and direction",
+                            "{}; the {carried} it carries keeps its own place and direction",
                             name.meaning
                         ),
                         quantity: if c < 3 {
@@ -299,16 +302,24 @@ pub(crate) struct ReferencePoses<'a> {
     pub time_s: &'a [f64],
 }
 
-/// The body after `body` on its kinematic branch, when it is moved by a rotary axis.
-fn rotary_child(machine: &Machine, body: usize) -> Option<usize> {
-    let (child, _) = machine.next_on_branch(body)?;
-    (machine.axis_moving(child)?.kind == AxisKind::Rotary).then_some(child)
+/// The body after `body` on its kinematic branch that a location error of `body`'s line can
+/// leave in place: the next rotary axis' body, or on the workpiece branch the workpiece the last
+/// rotary axis carries (no axis moves it). (On the tool branch the body a swivel head carries
+/// is already kept in place by the line's own slots, [`Machine::position_error_slots`].)
+fn carried_in_place(machine: &Machine, body: usize) -> Option<usize> {
+    let (child, tool) = machine.next_on_branch(body)?;
+    match machine.axis_moving(child) {
+        Some(axis) => (axis.kind == AxisKind::Rotary).then_some(child),
+        None => (!tool).then_some(child),
+    }
 }
 
-/// A location error of a rotary axis that carries another rotary axis exists in two
-/// representations (ISO 230-7): *relative*, the carried axis moves with it (the slot itself),
-/// and *absolute*, the carried axis keeps its place and direction at home. The absolute one is
-/// the axis' slot with twist e plus the carried body's slot with `−(v − t × ω, ω)` (t the
+/// A location error of a rotary axis that carries another rotary axis, or the workpiece, exists
+/// in two representations (ISO 230-7): *relative*, what it carries moves with it (the slot
+/// itself), and *absolute*, the carried axis or workpiece keeps its place and direction at home
+/// ([`carried_in_place`]). The two differ by what the carried body's own location errors, or a
+/// workpiece's set-up, hold while they are constant, not when the line drifts. The absolute one
+/// is the axis' slot with twist e plus the carried body's slot with `−(v − t × ω, ω)` (t the
 /// carried body's offset; home frames are parallel, so the adjoint reduces to this).
 fn absolute_location_column(
     machine: &Machine,
