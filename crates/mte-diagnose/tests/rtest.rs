@@ -44,7 +44,7 @@ fn b_pivot_shift(k: usize, delta: impl Fn(f64) -> f64 + Clone + 'static) -> Vec<
 }
 
 /// The C axis line displaced in the same sense: C body +δ, workpiece body −δ.
-fn c_pivot_shift(k: usize, delta: f64) -> Vec<Injected> {
+fn c_pivot_shift(k: usize, delta: impl Fn(f64) -> f64 + Clone + 'static) -> Vec<Injected> {
     let (c, w) = (
         ["C.position.dx", "C.position.dy", "C.position.dz"][k],
         [
@@ -53,7 +53,17 @@ fn c_pivot_shift(k: usize, delta: f64) -> Vec<Injected> {
             "workpiece.position.dz",
         ][k],
     );
-    vec![constant(c, delta), constant(w, -delta)]
+    let d2 = delta.clone();
+    vec![
+        Injected {
+            slot: c,
+            value: Box::new(delta),
+        },
+        Injected {
+            slot: w,
+            value: Box::new(move |t| -d2(t)),
+        },
+    ]
 }
 
 /// The B axis line tilted by `alpha` (rad) about X through the machine origin:
@@ -83,8 +93,8 @@ fn constant(slot: &'static str, value: f64) -> Injected {
 fn pivots() -> Vec<Injected> {
     let mut v = b_pivot_shift(0, |_| 0.004);
     v.extend(b_pivot_shift(2, |_| -0.012));
-    v.extend(c_pivot_shift(0, 0.008));
-    v.extend(c_pivot_shift(1, -0.005));
+    v.extend(c_pivot_shift(0, |_| 0.008));
+    v.extend(c_pivot_shift(1, |_| -0.005));
     v
 }
 
@@ -422,16 +432,7 @@ fn a_drift_of_the_c_line_under_a_table_that_stays_is_found_as_the_absolute_locat
     // the C body (the table moving with its line) does not describe.
     let rate_mm_per_s = 0.2e-3 / 60.0;
     let mut errors = pivots();
-    errors.extend([
-        Injected {
-            slot: "C.position.dx",
-            value: Box::new(move |t| rate_mm_per_s * t),
-        },
-        Injected {
-            slot: "workpiece.position.dx",
-            value: Box::new(move |t| -rate_mm_per_s * t),
-        },
-    ]);
+    errors.extend(c_pivot_shift(0, move |t| rate_mm_per_s * t));
     let d = run(&write_dataset("c-drift", &one_position(), &errors, 6, 31));
     let report = mte_diagnose::report::markdown(&d, "C line drift");
     assert_eq!(names(&d), vec!["EX0C abs drift".to_string()], "{report}");
@@ -451,16 +452,7 @@ fn both_rotary_lines_drifting_together_are_one_drift_whose_pair_is_named() {
     let rate_mm_per_s = 0.2e-3 / 60.0;
     let mut errors = pivots();
     errors.extend(b_pivot_shift(0, move |t| rate_mm_per_s * t));
-    errors.extend([
-        Injected {
-            slot: "C.position.dx",
-            value: Box::new(move |t| rate_mm_per_s * t),
-        },
-        Injected {
-            slot: "workpiece.position.dx",
-            value: Box::new(move |t| -rate_mm_per_s * t),
-        },
-    ]);
+    errors.extend(c_pivot_shift(0, move |t| rate_mm_per_s * t));
     let d = run(&write_dataset(
         "two-drifts",
         &one_position(),
