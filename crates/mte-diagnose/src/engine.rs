@@ -2999,9 +2999,8 @@ fn equivalent_drifts(
     if others.len() < 2 || term.width() != 1 {
         return Vec::new();
     }
-    let (n, p) = x.shape();
-    let rest = DMat::from_fn(n, p - 1, |i, j| x[(i, if j < col { j } else { j + 1 })]);
-    let projector = Projector::fit(&rest, &obs.values, w);
+    let n = x.nrows();
+    let projector = Projector::fit(&without_columns(x, col, 1), &obs.values, w);
     let mut d = DMat::zeros(n, others.len() + 1);
     d.set_column(0, &term.columns.column(0));
     for (k, t) in others.iter().enumerate() {
@@ -3337,12 +3336,7 @@ fn period_modes(
     let Some((p0, span)) = period_and_span(obs, term) else {
         return Vec::new();
     };
-    let (n, p) = x.shape();
-    let width = term.width();
-    let rest = DMat::from_fn(n, p - width, |i, j| {
-        x[(i, if j < col { j } else { j + width })]
-    });
-    let projector = Projector::fit(&rest, &obs.values, w);
+    let projector = Projector::fit(&without_columns(x, col, term.width()), &obs.values, w);
     let rss_without = projector.rss_w();
     let delta0 = projector.increment(&term.columns).delta_rss;
     let s2 = (sol.rss_w / sol.dof().max(1) as f64).max(1e-300);
@@ -4066,6 +4060,13 @@ fn confounded_with(c: &DMat, model: &[Term], x: &DMat, fit: &Projector) -> Vec<V
                 .collect()
         })
         .collect()
+}
+
+/// The design `x` without its columns `col..col + width` (one term's).
+fn without_columns(x: &DMat, col: usize, width: usize) -> DMat {
+    DMat::from_fn(x.nrows(), x.ncols() - width, |i, j| {
+        x[(i, if j < col { j } else { j + width })]
+    })
 }
 
 fn hcat(a: &DMat, b: &DMat) -> DMat {

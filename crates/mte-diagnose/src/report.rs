@@ -20,8 +20,6 @@ pub(crate) fn level(q: Quantity, v: f64) -> String {
     )
 }
 
-/// The readings the final model misses by far more than the rest, where they were taken, and
-/// what the fit is without them.
 /// `σ0 = …` against a stated noise; without one σ0 is the residuals' scatter in the data's unit
 /// (unit weights), said as such.
 fn scatter(d: &Diagnosis, sigma0: f64) -> String {
@@ -32,6 +30,8 @@ fn scatter(d: &Diagnosis, sigma0: f64) -> String {
     }
 }
 
+/// The readings the final model misses by far more than the rest, where they were taken, and
+/// what the fit is without them.
 fn outliers(s: &mut String, d: &Diagnosis) {
     const LISTED: usize = 12;
     if d.outliers.is_empty() {
