@@ -704,29 +704,22 @@ pub fn power_with(
                     continue;
                 };
                 c.any_finding += usize::from(!o.findings.is_empty());
-                let right = o.findings.iter().find(|f| names_effect(truth, &f.name));
-                if let Some(f) = right {
-                    c.named_right += 1;
-                    c.estimate_within_2u += usize::from(estimate_matches(truth, f, 2.0));
-                    if let Some(hit) = change_matches(truth, f, o, 2.0) {
-                        *c.change_within_2u.get_or_insert(0) += usize::from(hit);
+                match account(truth, o) {
+                    Account::Named(f) => {
+                        c.named_right += 1;
+                        c.estimate_within_2u += usize::from(estimate_matches(truth, f, 2.0));
+                        if let Some(hit) = change_matches(truth, f, o, 2.0) {
+                            *c.change_within_2u.get_or_insert(0) += usize::from(hit);
+                        }
+                        c.alone_explained += usize::from(
+                            o.verdict == mte_diagnose::Verdict::Explained
+                                && o.findings.iter().all(|f| names_effect(truth, &f.name)),
+                        );
                     }
-                    c.alone_explained += usize::from(
-                        o.verdict == mte_diagnose::Verdict::Explained
-                            && o.findings.iter().all(|f| names_effect(truth, &f.name)),
-                    );
-                } else {
-                    let listed = truth.kind == EffectKind::InstrumentScale
-                        && o.not_separable.iter().any(|a| names_effect(truth, a));
-                    let alternative = listed
-                        || o.findings
-                            .iter()
-                            .any(|f| f.alternatives.iter().any(|a| names_effect(truth, a)));
-                    c.named_as_alternative += usize::from(alternative);
-                    let out_of_reach = !alternative && stated_out_of_reach(truth, o);
-                    c.out_of_reach += usize::from(out_of_reach);
-                    c.below_limit +=
-                        usize::from(!alternative && !out_of_reach && stated_below_limit(truth, o));
+                    Account::NotSeparable => c.named_as_alternative += 1,
+                    Account::OutOfReach => c.out_of_reach += 1,
+                    Account::BelowLimit => c.below_limit += 1,
+                    Account::Missed => {}
                 }
                 all_names.extend(o.findings.iter().map(|f| f.name.clone()));
             }
@@ -734,6 +727,44 @@ pub fn power_with(
             c
         })
         .collect()
+}
+
+/// How a dataset's report stands to one hidden effect: the power table's columns, each taken
+/// only where the ones before it are not.
+pub enum Account<'o> {
+    /// A finding names it ([`names_effect`]).
+    Named(&'o FoundEffect),
+    /// A finding's alternatives the data cannot tell apart name it, or, for an instrument's
+    /// scale, the report's list of what is not separable does.
+    NotSeparable,
+    /// The report says the sampling cannot show its period ([`stated_out_of_reach`]).
+    OutOfReach,
+    /// The report states it below what the data would show ([`stated_below_limit`]).
+    BelowLimit,
+    /// None of these: missed without a word.
+    Missed,
+}
+
+/// [`Account`] of the hidden effect `truth` in the outcome `o`.
+pub fn account<'o>(truth: &TrueEffect, o: &'o Outcome) -> Account<'o> {
+    if let Some(f) = o.findings.iter().find(|f| names_effect(truth, &f.name)) {
+        return Account::Named(f);
+    }
+    let listed = truth.kind == EffectKind::InstrumentScale
+        && o.not_separable.iter().any(|a| names_effect(truth, a));
+    if listed
+        || o.findings
+            .iter()
+            .any(|f| f.alternatives.iter().any(|a| names_effect(truth, a)))
+    {
+        Account::NotSeparable
+    } else if stated_out_of_reach(truth, o) {
+        Account::OutOfReach
+    } else if stated_below_limit(truth, o) {
+        Account::BelowLimit
+    } else {
+        Account::Missed
+    }
 }
 
 /// Whether the report says that the sampling cannot show the effect's period: the effect
@@ -898,7 +929,7 @@ pub fn combined_hidden(effects: &[(Effect, f64)], rng: &mut impl Rng) -> Vec<Hid
         .iter()
         .enumerate()
         .map(|(k, &(effect, size))| {
-            let before = effects[..k].iter().filter(|(e, _)| *e == effect).count();
+            let before = of_its_family_before(effects, k);
             let mut h = effect.hidden(size, rng);
             match &mut h {
                 Hidden::Pitch { axis, .. } => *axis = before,
@@ -908,6 +939,15 @@ pub fn combined_hidden(effects: &[(Effect, f64)], rng: &mut impl Rng) -> Vec<Hid
             h
         })
         .collect()
+}
+
+/// How many effects of the family of `effects[k]` come before it: the axis it goes on
+/// ([`combined_hidden`]).
+fn of_its_family_before(effects: &[(Effect, f64)], k: usize) -> usize {
+    effects[..k]
+        .iter()
+        .filter(|(e, _)| *e == effects[k].0)
+        .count()
 }
 
 /// Several effects hidden at once in each dataset.
@@ -949,8 +989,7 @@ impl CombinedCell {
             .iter()
             .enumerate()
             .map(|(k, &(e, size))| {
-                let before = self.effects[..k].iter().filter(|(f, _)| *f == e).count();
-                let name = match (e, before) {
+                let name = match (e, of_its_family_before(&self.effects, k)) {
                     (Effect::Pitch, 1) => "periodic pitch of Y",
                     (Effect::Pitch, 2) => "periodic pitch of Z",
                     (Effect::PivotDrift, 1) => "thermal drift of EX0C",
@@ -1005,19 +1044,16 @@ pub fn combined(
         }
         let mut named = 0;
         for truth in &r.effects {
-            if let Some(f) = o.findings.iter().find(|f| names_effect(truth, &f.name)) {
-                named += 1;
-                let sized = change_matches(truth, f, o, 2.0)
-                    .unwrap_or_else(|| estimate_matches(truth, f, 2.0));
-                c.within_2u += usize::from(sized);
-            } else if o
-                .findings
-                .iter()
-                .any(|f| f.alternatives.iter().any(|a| names_effect(truth, a)))
-            {
-                c.effects_as_alternative += 1;
-            } else {
-                c.effects_out_of_reach += usize::from(stated_out_of_reach(truth, o));
+            match account(truth, o) {
+                Account::Named(f) => {
+                    named += 1;
+                    let sized = change_matches(truth, f, o, 2.0)
+                        .unwrap_or_else(|| estimate_matches(truth, f, 2.0));
+                    c.within_2u += usize::from(sized);
+                }
+                Account::NotSeparable => c.effects_as_alternative += 1,
+                Account::OutOfReach => c.effects_out_of_reach += 1,
+                Account::BelowLimit | Account::Missed => {}
             }
         }
         c.effects_named += named;

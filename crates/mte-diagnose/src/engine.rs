@@ -1386,17 +1386,22 @@ impl Pool {
         w: &DVec,
         formed: &mut Vec<(DMat, DMat)>,
     ) -> DMat {
-        let known =
-            |formed: &[(DMat, DMat)], t: &Term| formed.iter().position(|(c, _)| *c == t.columns);
+        // Each term's entry in `formed`; those not there yet are formed below, in order.
+        let mut index: Vec<Option<usize>> = beyond
+            .iter()
+            .map(|t| formed.iter().position(|(c, _)| *c == t.columns))
+            .collect();
         let new: Vec<&Term> = beyond
             .iter()
-            .filter(|t| known(formed, t).is_none())
+            .zip(&index)
+            .filter_map(|(t, i)| i.is_none().then_some(t))
             .collect();
         if !new.is_empty() {
             let columns = design(&new, w.len());
             let rows = weighted_products(&columns, &w.component_mul(w), &self.column_blocks());
             let mut at = 0;
-            for t in new {
+            for (t, i) in beyond.iter().zip(&mut index).filter(|(_, i)| i.is_none()) {
+                *i = Some(formed.len());
                 formed.push((t.columns.clone(), rows.rows(at, t.width()).into_owned()));
                 at += t.width();
             }
@@ -1405,8 +1410,8 @@ impl Pool {
         let mut out = DMat::zeros(p, fixed.ncols());
         out.rows_mut(0, fixed.nrows()).copy_from(fixed);
         let mut at = fixed.nrows();
-        for t in beyond {
-            let rows = &formed[known(formed, t).expect("formed above")].1;
+        for i in index {
+            let rows = &formed[i.expect("formed above")].1;
             out.rows_mut(at, rows.nrows()).copy_from(rows);
             at += rows.nrows();
         }
@@ -3350,21 +3355,18 @@ fn period_modes(
         .collect();
     // A period whose sine and cosine the rest of the model nearly holds has no determined
     // amplitude (it would take any size at no cost): not a rival mode (a reduction of zero).
-    let determined = |inc: &Increment, t: &Term| {
-        inc.new_rank == t.width() && inc.separability >= SEPARABILITY_TOLERANCE
+    let reduction = |inc: &Increment, t: &Term| {
+        if inc.new_rank == t.width() && inc.separability >= SEPARABILITY_TOLERANCE {
+            inc.delta_rss
+        } else {
+            0.0
+        }
     };
     let increments = projector.increments(grid.len(), |i| Cow::Borrowed(&grid[i].1.columns));
     let profile: Vec<(f64, f64, Term)> = grid
         .into_iter()
         .zip(increments)
-        .map(|((period, t), inc)| {
-            let d = if determined(&inc, &t) {
-                inc.delta_rss
-            } else {
-                0.0
-            };
-            (period, d, t)
-        })
+        .map(|((period, t), inc)| (period, reduction(&inc, &t), t))
         .collect();
     // Local optima on the grid, away from the chosen period, the best few refined between their
     // grid neighbours (a grid point can sit half a step off its optimum).
@@ -3384,13 +3386,7 @@ fn period_modes(
             match candidate.refine(i, &score) {
                 Some(r) => match r.family {
                     Family::Periodic { period } => {
-                        let inc = projector.increment(&r.columns);
-                        let d = if determined(&inc, &r) {
-                            inc.delta_rss
-                        } else {
-                            0.0
-                        };
-                        (period, d, r)
+                        (period, reduction(&projector.increment(&r.columns), &r), r)
                     }
                     _ => (*q, *d, t.clone()),
                 },
