@@ -308,7 +308,9 @@ pub fn physical_effects(
         .filter(|d| varies(&d.values))
         .map(|d| d.values.clone());
     let n = obs.len();
-    let times = time.as_ref().map(|(t, floor)| (t.as_slice(), *floor));
+    let settling = time
+        .as_ref()
+        .map(|(t, floor)| std::sync::Arc::new(Settling::new(t, *floor)));
     for slot in slots {
         if slot.column.iter().all(|v| v.abs() < 1e-15) {
             continue;
@@ -341,8 +343,8 @@ pub fn physical_effects(
                     column_matrix(&slot.constant_column()),
                     slot.quantity,
                 );
-                if let Some((t_values, floor)) = times {
-                    for drift in drift_candidates(&t, slot.reference.as_ref(), t_values, floor) {
+                if let Some(settling) = &settling {
+                    for drift in drift_candidates(&t, slot.reference.as_ref(), settling) {
                         out.push(Box::new(Requires {
                             term: t.name.clone(),
                             inner: drift,
@@ -466,10 +468,10 @@ pub fn physical_effects(
             }
         }
     }
-    if let Some((t_values, floor)) = times {
+    if let Some(settling) = &settling {
         for &(t, reference) in drifting {
             if t.width() == 1 && !matches!(t.family, Family::Drift { .. }) {
-                out.extend(drift_candidates(t, reference, t_values, floor));
+                out.extend(drift_candidates(t, reference, settling));
             }
         }
     }
@@ -660,12 +662,13 @@ impl BaseModelSpec {
     /// at a point the translations and tilts are partly confounded: one at a time, none would
     /// be significant while together they are.
     pub fn completions(&self, obs: &Observations, slots: &[SlotEffect]) -> Vec<Box<dyn Candidate>> {
-        let mut out: Vec<Box<dyn Candidate>> = Vec::new();
         let Some(degree) = self.components.as_ref().map(|c| c.degree) else {
-            return out;
+            return Vec::new();
         };
-        // Rotary axes in the order their first slot appears, with their slots and base order.
+        // Rotary axes in the order their first slot appears, with their slots and base order;
+        // the linear axes' slots with theirs.
         let mut rotary_axes: Vec<(String, usize, Vec<&SlotEffect>)> = Vec::new();
+        let mut linear: Vec<(&SlotEffect, usize)> = Vec::new();
         for slot in slots {
             if slot.column.iter().all(|v| v.abs() < 1e-15) || self.except.contains(&slot.name) {
                 continue;
@@ -679,79 +682,97 @@ impl BaseModelSpec {
                     Some((_, _, group)) => group.push(slot),
                     None => rotary_axes.push((axis, hi, vec![slot])),
                 }
-                continue;
-            }
-            // Orders in blocks: a smooth error's remainder spreads over several orders, which
-            // one at a time would not reveal.
-            let mut after: Option<String> = None;
-            for first in (hi + 1..=MAX_COMPONENT_DEGREE).step_by(COMPLETION_BLOCK) {
-                let last = (first + COMPLETION_BLOCK - 1).min(MAX_COMPONENT_DEGREE);
-                let Some(cols) = component_columns(obs, slot, first, last) else {
-                    break;
-                };
-                let (name, what) = if first == last {
-                    (format!("{} P{first}", slot.name), format!("degree {first}"))
-                } else {
-                    (
-                        format!("{} P{first}-{last}", slot.name),
-                        format!("degrees {first} to {last}"),
-                    )
-                };
-                let term = component_term(slot, name.clone(), &what, cols);
-                out.push(Box::new(Completion {
-                    term,
-                    after: after.replace(name),
-                }));
+            } else {
+                linear.push((slot, hi));
             }
         }
-        for (axis, hi, group) in rotary_axes {
-            let mut after: Option<String> = None;
-            for h in hi + 1..=MAX_COMPONENT_HARMONIC {
-                let parts: Vec<(&SlotEffect, DMat)> = group
-                    .iter()
-                    .filter_map(|s| component_columns(obs, s, h, h).map(|c| (*s, c)))
-                    .collect();
-                if parts.is_empty() {
-                    break;
+        // Each slot's and each rotary axis' columns are independent: built in parallel,
+        // collected in order.
+        use rayon::prelude::*;
+        let linear: Vec<Vec<Box<dyn Candidate>>> = linear
+            .into_par_iter()
+            .map(|(slot, hi)| {
+                let mut out: Vec<Box<dyn Candidate>> = Vec::new();
+                // Orders in blocks: a smooth error's remainder spreads over several orders, which
+                // one at a time would not reveal.
+                let mut after: Option<String> = None;
+                for first in (hi + 1..=MAX_COMPONENT_DEGREE).step_by(COMPLETION_BLOCK) {
+                    let last = (first + COMPLETION_BLOCK - 1).min(MAX_COMPONENT_DEGREE);
+                    let Some(cols) = component_columns(obs, slot, first, last) else {
+                        break;
+                    };
+                    let (name, what) = if first == last {
+                        (format!("{} P{first}", slot.name), format!("degree {first}"))
+                    } else {
+                        (
+                            format!("{} P{first}-{last}", slot.name),
+                            format!("degrees {first} to {last}"),
+                        )
+                    };
+                    let term = component_term(slot, name.clone(), &what, cols);
+                    out.push(Box::new(Completion {
+                        term,
+                        after: after.replace(name),
+                    }));
                 }
-                let name = format!("{axis} H{h}");
-                let mut columns =
-                    DMat::zeros(obs.len(), parts.iter().map(|(_, c)| c.ncols()).sum());
-                let mut at = 0;
-                for (_, c) in &parts {
-                    columns.columns_mut(at, c.ncols()).copy_from(c);
-                    at += c.ncols();
-                }
-                let term = Term {
-                    coefficients: parts
+                out
+            })
+            .collect();
+        let rotary: Vec<Vec<Box<dyn Candidate>>> = rotary_axes
+            .into_par_iter()
+            .map(|(axis, hi, group)| {
+                let mut out: Vec<Box<dyn Candidate>> = Vec::new();
+                let mut after: Option<String> = None;
+                for h in hi + 1..=MAX_COMPONENT_HARMONIC {
+                    let parts: Vec<(&SlotEffect, DMat)> = group
                         .iter()
-                        .flat_map(|(s, c)| {
-                            (0..c.ncols()).map(|k| (format!("{} H{h}[{k}]", s.name), s.quantity))
-                        })
-                        .collect(),
-                    label: format!("error motions of {axis}, harmonic {h} of a turn"),
-                    meaning: format!(
-                        "a higher harmonic of the error motions of {axis} ({}): the form of a bearing race or a wobble repeats every turn",
-                        parts
+                        .filter_map(|s| component_columns(obs, s, h, h).map(|c| (*s, c)))
+                        .collect();
+                    if parts.is_empty() {
+                        break;
+                    }
+                    let name = format!("{axis} H{h}");
+                    let mut columns =
+                        DMat::zeros(obs.len(), parts.iter().map(|(_, c)| c.ncols()).sum());
+                    let mut at = 0;
+                    for (_, c) in &parts {
+                        columns.columns_mut(at, c.ncols()).copy_from(c);
+                        at += c.ncols();
+                    }
+                    let term = Term {
+                        coefficients: parts
                             .iter()
-                            .map(|(s, _)| s.name.as_str())
-                            .collect::<Vec<_>>()
-                            .join(", ")
-                    ),
-                    name: name.clone(),
-                    family: Family::Base,
-                    columns,
-                    summary: Summary::EachCoefficient,
-                    exposed_by: Some(axis.clone()),
-                    separated_by: None,
-                };
-                out.push(Box::new(Completion {
-                    term,
-                    after: after.replace(name),
-                }));
-            }
-        }
-        out
+                            .flat_map(|(s, c)| {
+                                (0..c.ncols())
+                                    .map(|k| (format!("{} H{h}[{k}]", s.name), s.quantity))
+                            })
+                            .collect(),
+                        label: format!("error motions of {axis}, harmonic {h} of a turn"),
+                        meaning: format!(
+                            "a higher harmonic of the error motions of {axis} ({}): the form of a \
+                             bearing race or a wobble repeats every turn",
+                            parts
+                                .iter()
+                                .map(|(s, _)| s.name.as_str())
+                                .collect::<Vec<_>>()
+                                .join(", ")
+                        ),
+                        name: name.clone(),
+                        family: Family::Base,
+                        columns,
+                        summary: Summary::EachCoefficient,
+                        exposed_by: Some(axis.clone()),
+                        separated_by: None,
+                    };
+                    out.push(Box::new(Completion {
+                        term,
+                        after: after.replace(name),
+                    }));
+                }
+                out
+            })
+            .collect();
+        linear.into_iter().chain(rotary).flatten().collect()
     }
 }
 
@@ -1065,10 +1086,9 @@ impl Candidate for Alternatives {
 fn drift_candidates(
     constant: &Term,
     reference: Option<&Reference>,
-    t: &[f64],
-    floor: f64,
+    settling: &std::sync::Arc<Settling>,
 ) -> Vec<Box<dyn Candidate>> {
-    let t0 = t.iter().copied().fold(f64::INFINITY, f64::min);
+    let (t, t0) = (&settling.times[..], settling.t0);
     // Per observation: the constant's column, its reference part and the reference time (the
     // reading's own time where there is none: the drift then acts at the reading alone).
     let reference_part: Vec<f64> = match reference {
@@ -1105,7 +1125,9 @@ fn drift_candidates(
     };
     let (name, label) = (constant.name.clone(), constant.label.clone());
     let column: Vec<f64> = col.iter().copied().collect();
-    let times = t.to_vec();
+    let referenced = reference.is_some();
+    let grid = settling.grid.clone();
+    let settling = settling.clone();
     let make = move |tau: f64, rows: Option<&[usize]>| Term {
         name: format!("{name} drift exp"),
         label: format!("thermal drift of {name} (first-order)"),
@@ -1114,12 +1136,20 @@ fn drift_candidates(
             time_constant_s: Some(tau),
         },
         columns: {
-            let d = |t: f64| 1.0 - (-(t - t0) / tau).exp();
-            let at = |i: usize| {
-                column[i] * d(times[i]) - reference_part[i] * (d(times[i]) - d(t_ref[i]))
+            let d = settling.of_readings(tau);
+            // The reference readings' settling, once per run of equal reference times.
+            let mut last_ref = (f64::NAN, 0.0);
+            let mut at = |i: usize| {
+                if !referenced {
+                    return column[i] * d[i];
+                }
+                if t_ref[i] != last_ref.0 {
+                    last_ref = (t_ref[i], settling.at(t_ref[i], tau));
+                }
+                column[i] * d[i] - reference_part[i] * (d[i] - last_ref.1)
             };
             match rows {
-                None => DMat::from_fn(times.len(), 1, |i, _| at(i)),
+                None => DMat::from_fn(d.len(), 1, |i, _| at(i)),
                 Some(rows) => DMat::from_fn(rows.len(), 1, |k, _| at(rows[k])),
             }
         },
@@ -1128,8 +1158,51 @@ fn drift_candidates(
         exposed_by: Some("t".into()),
         separated_by: None,
     };
-    let exponential = Scan::new(time_constants_to_scan(t, floor), true, make);
+    let exponential = Scan::new(grid, true, make);
     vec![Box::new(linear), Box::new(exponential)]
+}
+
+/// The first-order settling `1 − exp(−(t − t₀)/τ)` of the readings' times `t` (`t₀` the
+/// first) over the time constants the first-order drifts scan
+/// ([`time_constants_to_scan`]): every drift of a dataset scans the same grid on the same
+/// readings, so each grid value's settling is computed once and shared.
+struct Settling {
+    times: Vec<f64>,
+    t0: f64,
+    grid: Vec<f64>,
+    on_grid: Vec<std::sync::OnceLock<Vec<f64>>>,
+}
+
+impl Settling {
+    /// The settling of the readings at `times`, the shortest time constant scanned `floor`.
+    fn new(times: &[f64], floor: f64) -> Settling {
+        let grid = time_constants_to_scan(times, floor);
+        Settling {
+            times: times.to_vec(),
+            t0: times.iter().copied().fold(f64::INFINITY, f64::min),
+            on_grid: grid.iter().map(|_| std::sync::OnceLock::new()).collect(),
+            grid,
+        }
+    }
+
+    /// The settling at time `t` for the time constant `tau`.
+    fn at(&self, t: f64, tau: f64) -> f64 {
+        1.0 - (-(t - self.t0) / tau).exp()
+    }
+
+    /// Every reading's settling for the time constant `tau` (computed once for a grid value).
+    fn of_readings(&self, tau: f64) -> std::borrow::Cow<'_, [f64]> {
+        let all = || {
+            self.times
+                .iter()
+                .map(|&t| self.at(t, tau))
+                .collect::<Vec<_>>()
+        };
+        match self.grid.iter().position(|&g| g == tau) {
+            Some(k) => std::borrow::Cow::Borrowed(&self.on_grid[k].get_or_init(all)[..]),
+            None => std::borrow::Cow::Owned(all()),
+        }
+    }
 }
 
 fn coefficient_name(name: &str, suffix: &str, k: usize, width: usize) -> String {
@@ -1184,7 +1257,11 @@ mod tests {
             &column + &reference.column,
             Quantity::Length,
         );
-        let drifts = drift_candidates(&constant, Some(&reference), &t, 10.0);
+        let drifts = drift_candidates(
+            &constant,
+            Some(&reference),
+            &std::sync::Arc::new(Settling::new(&t, 10.0)),
+        );
         let obs = Observations {
             values: DVec::zeros(4),
             sigma: None,

@@ -881,10 +881,14 @@ fn conclude(
     for (k, f) in findings.iter_mut().enumerate() {
         f.estimates.extend(change(&[k]));
     }
+    // The fit of the final model without each finding: its rivals are measured against it.
+    let rests: Vec<Projector> = (0..chosen.len())
+        .map(|k| searcher.fit_without(&chosen, k, &base_fit))
+        .collect();
     // A drift the data cannot tell from two others together.
     for (k, c) in chosen.iter().enumerate() {
         findings[k].alternatives.extend(
-            equivalent_drifts(obs, w, &x, offsets[k], &c.term, candidates)
+            equivalent_drifts(obs, &rests[k], &c.term, candidates)
                 .into_iter()
                 .map(|(a, b)| format!("{a} and {b} together (same time dependence)")),
         );
@@ -894,15 +898,7 @@ fn conclude(
     let mut ambiguity_notes = Vec::new();
     if thinned.is_none() {
         for (k, c) in chosen.iter().enumerate() {
-            let modes = period_modes(
-                obs,
-                w,
-                &x,
-                &sol,
-                offsets[k],
-                &c.term,
-                searcher.chosen_candidate(c),
-            );
+            let modes = period_modes(obs, &rests[k], &sol, &c.term, searcher.chosen_candidate(c));
             let Some(h) = findings[k]
                 .hyper_parameter
                 .clone()
@@ -1515,6 +1511,16 @@ impl Products {
     }
 }
 
+/// The products `Qᵀ W C` of the completions' columns with the bases of a search's fits
+/// ([`Searcher::next_completion`], [`Projector::increments_knowing`]), by pool entry: of each,
+/// the rows of the first `stable` directions stay valid while the model grows (the basis of
+/// the base and its completions, which every later fit extends); those beyond are formed again.
+#[derive(Default)]
+struct CompletionRows {
+    stable: usize,
+    rows: HashMap<usize, DMat>,
+}
+
 /// A term the search added, with where it came from.
 #[derive(Clone)]
 struct Chosen {
@@ -1586,7 +1592,8 @@ impl Searcher<'_> {
     ) -> SearchResult {
         let mut completed: Vec<Term> = Vec::new();
         let mut fit = base_fit;
-        while let Some(t) = self.next_completion(&completed, &fit) {
+        let mut rows = CompletionRows::default();
+        while let Some(t) = self.next_completion(&completed, &fit, &mut rows, fit.rank()) {
             fit = fit.extended(&t.columns);
             completed.push(t);
         }
@@ -1595,7 +1602,7 @@ impl Searcher<'_> {
             base: &base,
             ..*self
         }
-        .search_causes(w, folds, held_out, &fit);
+        .search_causes(w, folds, held_out, &fit, rows);
         completed.append(&mut found.completed);
         found.completed = completed;
         found
@@ -1605,14 +1612,32 @@ impl Searcher<'_> {
     /// `model`): the most significant higher order of a base component error
     /// ([`Role::Completion`]) not in the model, if significant at [`COMPLETION_LEVEL`]
     /// (Bonferroni over those eligible); only its columns the model does not have yet.
-    fn next_completion(&self, model: &[Term], fit: &Projector) -> Option<Term> {
+    /// `rows`: the entries' products with the basis of earlier calls, of which the first
+    /// `stable` directions stay the first of every later fit of the search.
+    fn next_completion(
+        &self,
+        model: &[Term],
+        fit: &Projector,
+        rows: &mut CompletionRows,
+        stable: usize,
+    ) -> Option<Term> {
         let (rss, dof) = (fit.rss_w(), fit.dof());
         let terms: Vec<&Term> = self.base.iter().chain(model).collect();
         let entries = self.next_order_entries(&terms);
-        // One product with the model's basis per batch of entries, not one per entry.
-        let increments = fit.increments(entries.len(), |i| {
-            Cow::Borrowed(&self.pool.variants[entries[i]][0].columns)
-        });
+        let mut known: Vec<DMat> = entries
+            .iter()
+            .map(|ci| match rows.rows.remove(ci) {
+                Some(r) => r.rows(0, rows.stable.min(r.nrows())).into_owned(),
+                None => DMat::zeros(0, 0),
+            })
+            .collect();
+        let columns: Vec<&DMat> = entries
+            .iter()
+            .map(|&ci| &self.pool.variants[ci][0].columns)
+            .collect();
+        let increments = fit.increments_knowing(&columns, &mut known);
+        rows.rows.extend(entries.iter().copied().zip(known));
+        rows.stable = stable;
         // A block of orders may hold some the model already has (confounded components of a
         // point measurement): it is tested on the new directions it brings.
         let mut tested: Vec<(usize, f64)> = entries
@@ -1672,6 +1697,7 @@ impl Searcher<'_> {
         folds: &Folds,
         held_out: Option<usize>,
         base_fit: &Projector,
+        mut completion_rows: CompletionRows,
     ) -> SearchResult {
         let explain = held_out.is_none();
         let obs = self.obs;
@@ -1712,15 +1738,25 @@ impl Searcher<'_> {
         // Variants whose columns a refinement changed (not the pool's: no products).
         let mut refined: std::collections::HashSet<(usize, usize)> = Default::default();
 
+        // The fit of the base and the completions that joined it: the model's fits extend it.
+        let mut late_fit = Cow::Borrowed(base_fit);
+        let mut stable_qc: Option<DMat> = None;
         loop {
-            let projector = base_fit.extended_to(&x);
+            let projector = late_fit.extended_to(&x);
             // With causes in, a completion the causes' size hid may show: it joins the base
             // before the next cause is sought. (The causes' periods and time constants are not
             // refined again for it: a higher order of an ordinary error moves them by a small
             // fraction of their uncertainty — τ 3289 → 3288 s, u = 59 s, on the 8-cycle bench
             // dataset — and the next cause's entry refines them all.)
             if !chosen.is_empty() {
-                if let Some(t) = self.next_completion(&terms[self.base.len()..], &projector) {
+                if let Some(t) = self.next_completion(
+                    &terms[self.base.len()..],
+                    &projector,
+                    &mut completion_rows,
+                    late_fit.rank(),
+                ) {
+                    late_fit = Cow::Owned(late_fit.extended(&t.columns));
+                    stable_qc = None;
                     late.push(t);
                     terms = model_terms(&late, &chosen);
                     x = design(&terms.iter().collect::<Vec<_>>(), obs.len());
@@ -1729,13 +1765,18 @@ impl Searcher<'_> {
             }
             let rss = projector.rss_w();
             // Every variant's `Qᵀ W c`, from the products; a variant a refinement changed is
-            // projected directly.
-            let qc = projector.basis_products(&self.pool.model_products(
-                &products.x,
-                &terms[self.base.len()..],
-                w,
-                &mut formed,
-            ));
+            // projected directly. The rows of the base's and its completions' directions are
+            // the same at every step until a completion joins: formed once.
+            let xtc =
+                self.pool
+                    .model_products(&products.x, &terms[self.base.len()..], w, &mut formed);
+            let stable = late_fit.rank();
+            let stable_rows =
+                stable_qc.get_or_insert_with(|| projector.basis_products_of(0..stable, &xtc));
+            let mut qc = DMat::zeros(projector.rank(), xtc.ncols());
+            qc.rows_mut(0, stable).copy_from(stable_rows);
+            qc.rows_mut(stable, projector.rank() - stable)
+                .copy_from(&projector.basis_products_of(stable..projector.rank(), &xtc));
             let qty = projector.basis_of(y);
             let increment = |ci: usize, vi: usize, t: &Term| {
                 if refined.contains(&(ci, vi)) {
@@ -2029,7 +2070,7 @@ impl Searcher<'_> {
                     base: &base,
                     ..*self
                 }
-                .refit_scanned(&mut chosen, base_fit);
+                .refit_scanned(&mut chosen, &late_fit);
             }
             terms = model_terms(&late, &chosen);
             x = design(&terms.iter().collect::<Vec<_>>(), obs.len());
@@ -2039,7 +2080,7 @@ impl Searcher<'_> {
             base: &base,
             ..*self
         }
-        .prune(&mut chosen, folds, base_fit);
+        .prune(&mut chosen, folds, &late_fit);
         SearchResult {
             completed: late,
             chosen,
@@ -2500,6 +2541,9 @@ impl Searcher<'_> {
         let runs: Vec<FoldRun> = outer
             .test
             .par_iter()
+            // One fold a job: a thread that finishes the search on all data takes a fold
+            // another has not started (by default a thread takes a run of folds as one job).
+            .with_max_len(1)
             .enumerate()
             .map(|(fold, test)| {
                 let mut include = vec![true; n];
@@ -2969,16 +3013,14 @@ const EQUIVALENT_DRIFT_SHARE: f64 = 1e-9;
 const EQUIVALENT_PAIRS: usize = 3;
 
 /// Pairs of drifts of other parameters, with the same time dependence, that together give the
-/// readings the drift finding `term` gives (columns `col..` of the final design `x`, weights
-/// `w`): beyond the rest of the model, all but [`EQUIVALENT_DRIFT_SHARE`] of its effect is
-/// theirs, and neither alone holds it. On an R-test the ball sees only the tool relative to the
+/// readings the drift finding `term` gives: beyond the rest of the final model (its fit
+/// `rest`), all but [`EQUIVALENT_DRIFT_SHARE`] of its effect is theirs, and neither alone holds
+/// it. On an R-test the ball sees only the tool relative to the
 /// table: the lines of both rotary axes drifting together in X are the tool drifting the other
 /// way. The pairs' names, in the library's order, at most [`EQUIVALENT_PAIRS`].
 fn equivalent_drifts(
     obs: &Observations,
-    w: &DVec,
-    x: &DMat,
-    col: usize,
+    rest: &Projector,
     term: &Term,
     candidates: &[Box<dyn Candidate>],
 ) -> Vec<(String, String)> {
@@ -3004,15 +3046,13 @@ fn equivalent_drifts(
     if others.len() < 2 || term.width() != 1 {
         return Vec::new();
     }
-    let n = x.nrows();
-    let projector = Projector::fit(&without_columns(x, col, 1), &obs.values, w);
-    let mut d = DMat::zeros(n, others.len() + 1);
+    let mut d = DMat::zeros(obs.len(), others.len() + 1);
     d.set_column(0, &term.columns.column(0));
     for (k, t) in others.iter().enumerate() {
         d.set_column(k + 1, &t.columns.column(0));
     }
     // Beyond the rest of the model: the finding's effect (column 0) and each other drift's.
-    let r = projector.residual_part(&d);
+    let r = rest.residual_part(&d);
     let g = crate::fit::tr_mul(&r, &r);
     let own = g[(0, 0)];
     if own <= 0.0 {
@@ -3323,25 +3363,22 @@ fn period_and_span(obs: &Observations, t: &Term) -> Option<(f64, f64)> {
     Some((period, hi - lo))
 }
 
-/// The local optima of the profile of the periodic term `term` (columns `col..` of the final
-/// design `x`, solution `sol`) over its candidate's grid, away from the chosen period by more
+/// The local optima of the profile of the periodic term `term` of the final model (solution
+/// `sol`; `projector`: the fit of the model without it) over its candidate's grid, away from the chosen period by more
 /// than the Fourier resolution, whose fit is within [`MODE_CHI2`] of the chosen one's; best
 /// first. Every grid optimum within [`PEAK_SHARE`] of the chosen period's fit is refined (at
 /// most [`MAX_MODES`]): at few positions a periodic error has many aliases, and the grid alone
 /// cannot rank them.
 fn period_modes(
     obs: &Observations,
-    w: &DVec,
-    x: &DMat,
+    projector: &Projector,
     sol: &Solution,
-    col: usize,
     term: &Term,
     candidate: &dyn Candidate,
 ) -> Vec<PeriodMode> {
     let Some((p0, span)) = period_and_span(obs, term) else {
         return Vec::new();
     };
-    let projector = Projector::fit(&without_columns(x, col, term.width()), &obs.values, w);
     let rss_without = projector.rss_w();
     let delta0 = projector.increment(&term.columns).delta_rss;
     let s2 = (sol.rss_w / sol.dof().max(1) as f64).max(1e-300);
@@ -4056,13 +4093,6 @@ fn confounded_with(c: &DMat, model: &[Term], x: &DMat, fit: &Projector) -> Vec<V
                 .collect()
         })
         .collect()
-}
-
-/// The design `x` without its columns `col..col + width` (one term's).
-fn without_columns(x: &DMat, col: usize, width: usize) -> DMat {
-    DMat::from_fn(x.nrows(), x.ncols() - width, |i, j| {
-        x[(i, if j < col { j } else { j + width })]
-    })
 }
 
 fn hcat(a: &DMat, b: &DMat) -> DMat {

@@ -3,7 +3,7 @@
 
 use std::borrow::Cow;
 
-use mte_linalg::bridge::{as_faer, product};
+use mte_linalg::bridge::{as_faer, gram, product};
 use mte_linalg::nalgebra::{DMatrixView, Dyn, SymmetricEigen};
 use mte_linalg::{DMat, DVec};
 
@@ -375,7 +375,7 @@ impl<'a> FoldFits<'a> {
             .iter()
             .map(|test| {
                 let qt = select_rows(&q, test);
-                let m = DMat::identity(r, r) - tr_mul(&qt, &qt);
+                let m = DMat::identity(r, r) - gram(as_faer(&qt));
                 let g = &qty - qt.tr_mul(&select(&yw, test));
                 FoldFit {
                     qt,
@@ -966,6 +966,64 @@ impl Projector {
         out
     }
 
+    /// [`Projector::increments`] of the candidates `c` whose products with the first
+    /// directions of this projector's basis are known: `known[i]` holds `Qᵀ W cᵢ` on the first
+    /// `known[i].nrows()` of them (from a projector this one extends: [`Projector::extended`]
+    /// keeps the old basis as its first directions). Only the products with the directions
+    /// beyond are formed — a model completed one term at a time reads the directions each
+    /// term adds, not its whole basis again — and `known` becomes the products with all.
+    pub fn increments_knowing(&self, c: &[&DMat], known: &mut [DMat]) -> Vec<Increment> {
+        let r = self.q.ncols();
+        let whitened: Vec<DMat> = c
+            .iter()
+            .map(|c| {
+                let mut cw = (*c).clone();
+                for mut column in cw.column_iter_mut() {
+                    column.component_mul_assign(&self.w);
+                }
+                cw
+            })
+            .collect();
+        // Candidates that know as many directions: one product with the directions beyond.
+        let from: Vec<usize> = known.iter().map(|k| k.nrows().min(r)).collect();
+        let mut order: Vec<usize> = (0..c.len()).collect();
+        order.sort_by_key(|&i| from[i]);
+        for group in order.chunk_by(|&a, &b| from[a] == from[b]) {
+            let r0 = from[group[0]];
+            let width: usize = group.iter().map(|&i| whitened[i].ncols()).sum();
+            let mut data = Vec::with_capacity(self.w.len() * width);
+            for &i in group {
+                data.extend_from_slice(whitened[i].as_slice());
+            }
+            let cw = DMat::from_vec(self.w.len(), width, data);
+            let beyond = product(
+                as_faer(&self.q).subcols(r0, r - r0).transpose(),
+                as_faer(&cw),
+            );
+            let mut at = 0;
+            for &i in group {
+                let k = whitened[i].ncols();
+                let mut a = DMat::zeros(r, k);
+                if r0 > 0 {
+                    a.rows_mut(0, r0).copy_from(&known[i].rows(0, r0));
+                }
+                a.rows_mut(r0, r - r0).copy_from(&beyond.columns(at, k));
+                known[i] = a;
+                at += k;
+            }
+        }
+        whitened
+            .iter()
+            .zip(known.iter())
+            .map(|(cw, a)| {
+                self.increment_of(
+                    cw.columns(0, cw.ncols()),
+                    (r > 0).then(|| a.columns(0, a.ncols())),
+                )
+            })
+            .collect()
+    }
+
     /// [`Projector::increments`] of `count` candidates that are functions of one variable:
     /// candidate `k` is `basis(k, v)` evaluated on the variable's distinct values `v`
     /// (`groups`, of this projector's rows). Its products with the model and the residuals are
@@ -1025,12 +1083,19 @@ impl Projector {
         )
     }
 
-    /// `Qᵀ W C` of candidates' columns `C` from their products `xtc = Xᵀ W² C` with the model's
-    /// design `X` (p × columns, weights `W`): `mapᵀ xtc`, rank × p × columns work instead of a
-    /// pass over the observations (n × rank × columns). A search keeps the products of every
-    /// candidate with its model and adds rows as the model grows ([`weighted_products`]).
-    pub fn basis_products(&self, xtc: &DMat) -> DMat {
-        tr_mul(&self.map, xtc)
+    /// `Qᵀ W C` of candidates' columns `C` on the basis' `directions`, from their products
+    /// `xtc = Xᵀ W² C` with the model's design `X` (p × columns, weights `W`): those rows of
+    /// `mapᵀ xtc`, directions × p × columns work instead of a pass over the observations
+    /// (n × directions × columns). A search keeps the products of every candidate with its
+    /// model and adds rows as the model grows ([`weighted_products`]); a fit extended from
+    /// another differs from it only on the directions it adds ([`Projector::extended`] keeps
+    /// the old basis as its first directions).
+    pub fn basis_products_of(&self, directions: std::ops::Range<usize>, xtc: &DMat) -> DMat {
+        let map = self
+            .map
+            .columns(directions.start, directions.len())
+            .into_owned();
+        tr_mul(&map, xtc)
     }
 
     /// `Qᵀ W y` of the observations `y` the projector's residuals are of: with it, a candidate's
@@ -1043,7 +1108,7 @@ impl Projector {
     }
 
     /// [`Projector::increment`] of a candidate `C` from its products alone: `g = CᵀW²C`,
-    /// `cy = CᵀW²y`, `a = QᵀWC` ([`Projector::basis_products`]) and `qty = QᵀWy`
+    /// `cy = CᵀW²y`, `a = QᵀWC` ([`Projector::basis_products_of`]) and `qty = QᵀWy`
     /// ([`Projector::basis_of`]) — its product with the residuals is `cy − aᵀ qty`.
     pub fn increment_from_products(
         &self,
@@ -1372,7 +1437,7 @@ fn batched_products(
 fn orthonormalised(q: DMat, map: DMat) -> (DMat, DMat) {
     let (mut q, mut map) = (q, map);
     for _ in 0..2 {
-        let eig = tr_mul(&q, &q).symmetric_eigen();
+        let eig = gram(as_faer(&q)).symmetric_eigen();
         let top = eig.eigenvalues.max().max(0.0);
         let keep: Vec<usize> = (0..eig.eigenvalues.len())
             .filter(|&k| eig.eigenvalues[k] > FOLD_TOLERANCE * top && top > 0.0)
@@ -1617,11 +1682,10 @@ mod tests {
         let cy = weighted_products(&DMat::from_column_slice(n, 1, y.as_slice()), &w2, &[&c])
             .row(0)
             .transpose();
-        let a = fit.basis_products(&weighted_products(
-            &x.columns(0, 4).into_owned(),
-            &w2,
-            &[&c],
-        ));
+        let a = fit.basis_products_of(
+            0..fit.rank(),
+            &weighted_products(&x.columns(0, 4).into_owned(), &w2, &[&c]),
+        );
         let from_products = fit.increment_from_products(gram, cy, a.as_view(), &fit.basis_of(&y));
         let direct = fit.increment(&c);
         assert_eq!(from_products.new_rank, direct.new_rank);

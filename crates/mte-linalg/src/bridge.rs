@@ -229,6 +229,39 @@ pub fn product(a: MatRef<'_, f64>, b: MatRef<'_, f64>) -> DMat {
     out
 }
 
+/// The Gram matrix `aᵀ a` by faer, sequential like [`product`]: only its lower triangle is
+/// computed (half the work of the full product) and mirrored, so it is exactly symmetric.
+///
+/// # Example
+/// ```
+/// use mte_linalg::bridge::{DMat, as_faer, gram};
+/// let a = DMat::from_row_slice(3, 2, &[1.0, 2.0, 3.0, 4.0, 5.0, 6.0]);
+/// assert_eq!(gram(as_faer(&a)), a.transpose() * &a);
+/// ```
+pub fn gram(a: MatRef<'_, f64>) -> DMat {
+    use faer::linalg::matmul::triangular::{BlockStructure, matmul};
+    let k = a.ncols();
+    let mut out = DMat::zeros(k, k);
+    matmul(
+        as_faer_mut(&mut out),
+        BlockStructure::TriangularLower,
+        faer::Accum::Replace,
+        a.transpose(),
+        BlockStructure::Rectangular,
+        a,
+        BlockStructure::Rectangular,
+        1.0,
+        faer::Par::Seq,
+    );
+    clean_vector_state();
+    for j in 0..k {
+        for i in 0..j {
+            out[(i, j)] = out[(j, i)];
+        }
+    }
+    out
+}
+
 /// Leaves the vector registers as compiled code expects them after a faer kernel.
 ///
 /// faer's matrix kernels (the `gemm` crate's AVX-512 micro-kernels) return with the upper halves
