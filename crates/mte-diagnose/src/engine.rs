@@ -1541,6 +1541,8 @@ struct Chosen {
 struct SearchResult {
     /// Higher orders of the base's component errors the data asked for.
     completed: Vec<Term>,
+    /// The fit of the searcher's base and `completed`.
+    completed_fit: Projector,
     chosen: Vec<Chosen>,
     steps: Vec<Step>,
     not_separable: Vec<NotSeparable>,
@@ -1741,8 +1743,13 @@ impl Searcher<'_> {
         // The fit of the base and the completions that joined it: the model's fits extend it.
         let mut late_fit = Cow::Borrowed(base_fit);
         let mut stable_qc: Option<DMat> = None;
-        loop {
-            let projector = late_fit.extended_to(&x);
+        let last = loop {
+            // (The base and its completions alone: their fit itself.)
+            let projector = if x.ncols() == late_fit.design_columns() {
+                late_fit.clone()
+            } else {
+                Cow::Owned(late_fit.extended_to(&x))
+            };
             // With causes in, a completion the causes' size hid may show: it joins the base
             // before the next cause is sought. (The causes' periods and time constants are not
             // refined again for it: a higher order of an ordinary error moves them by a small
@@ -1987,7 +1994,7 @@ impl Searcher<'_> {
                     added: None,
                     variants_tested,
                 });
-                break;
+                break (x, projector.into_owned());
             };
             if chosen.len() == params.max_effects {
                 hit_limit = true;
@@ -1996,7 +2003,7 @@ impl Searcher<'_> {
                     added: None,
                     variants_tested,
                 });
-                break;
+                break (x, projector.into_owned());
             }
             let term = variant(&overrides, ci, vi);
             // Alternatives: shortlisted candidates that explain the same residual direction about
@@ -2074,15 +2081,16 @@ impl Searcher<'_> {
             }
             terms = model_terms(&late, &chosen);
             x = design(&terms.iter().collect::<Vec<_>>(), obs.len());
-        }
+        };
         let base: Vec<Term> = self.base.iter().chain(&late).cloned().collect();
         let pruned = Searcher {
             base: &base,
             ..*self
         }
-        .prune(&mut chosen, folds, &late_fit);
+        .prune(&mut chosen, folds, &late_fit, last);
         SearchResult {
             completed: late,
+            completed_fit: late_fit.into_owned(),
             chosen,
             steps,
             not_separable,
@@ -2388,11 +2396,22 @@ impl Searcher<'_> {
     /// Backward pruning: every cause is re-tested in the complete model (F test of removing it,
     /// Bonferroni-adjusted as when it entered, and its cross-validated gain); the weakest that
     /// fails leaves, with the causes that build on it, until all pass. Returns the names removed.
-    fn prune(&self, chosen: &mut Vec<Chosen>, folds: &Folds, base_fit: &Projector) -> Vec<String> {
+    /// `last`: the design and fit of the model `chosen` as the search left it.
+    fn prune(
+        &self,
+        chosen: &mut Vec<Chosen>,
+        folds: &Folds,
+        base_fit: &Projector,
+        last: (DMat, Projector),
+    ) -> Vec<String> {
         let y = &self.obs.values;
         let mut pruned = Vec::new();
+        let mut last = Some(last);
         while !chosen.is_empty() {
-            let (x, fit) = self.fit_of(base_fit, &self.with(chosen, None));
+            let (x, fit) = match last.take() {
+                Some(last) => last,
+                None => self.fit_of(base_fit, &self.with(chosen, None)),
+            };
             let cv_full = fit.fold_fits(folds, &x, y).rms();
             let mut weakest: Option<(usize, f64, f64)> = None; // (index, p, cv ratio)
             for j in 0..chosen.len() {
@@ -2570,8 +2589,8 @@ impl Searcher<'_> {
                 };
                 // As the final model does, the causes that rest on the base's orders alone leave.
                 let mut chosen = found.chosen;
-                let (x_base, completed_fit) =
-                    searcher.fit_of(&fold_fit, &completed.iter().collect::<Vec<_>>());
+                let x_base = design(&completed.iter().collect::<Vec<_>>(), n);
+                let completed_fit = found.completed_fit;
                 let (x, fit) = searcher.drop_resting_on_orders(&mut chosen, &completed_fit);
                 let held_out_residuals = |x: &DMat, fit: &Projector| -> Vec<f64> {
                     let coef = fit.coefficients(&obs.values);
