@@ -1655,6 +1655,34 @@ mod tests {
     }
 
     #[test]
+    fn increments_knowing_an_earlier_basis_equal_direct_ones() {
+        let n = 300;
+        let (x, y, w) = problem(n);
+        let narrow = Projector::fit(&x.columns(0, 3).into_owned(), &y, &w);
+        let wide = narrow.extended(&x.columns(3, 2).into_owned());
+        let v: Vec<f64> = (0..n).map(|i| ((i * 7) % 23) as f64 * 3.7).collect();
+        let c: Vec<DMat> = [11.0, 19.5, 40.0]
+            .iter()
+            .map(|&p| crate::basis::sin_cos_columns(&v, p))
+            .collect();
+        let refs: Vec<&DMat> = c.iter().collect();
+        // Nothing known, then the narrow basis' products known (one candidate's not).
+        let mut known = vec![DMat::zeros(0, 0); c.len()];
+        let first = narrow.increments_knowing(&refs, &mut known);
+        known[1] = DMat::zeros(0, 0);
+        let second = wide.increments_knowing(&refs, &mut known);
+        for (knowing, fit) in [(&first, &narrow), (&second, &wide)] {
+            let direct = fit.increments(c.len(), |k| Cow::Borrowed(&c[k]));
+            for (d, k) in direct.iter().zip(knowing) {
+                assert_eq!(d.new_rank, k.new_rank);
+                assert!((d.delta_rss - k.delta_rss).abs() < 1e-9 * d.delta_rss);
+                assert!((d.separability - k.separability).abs() < 1e-9);
+            }
+        }
+        assert!(known.iter().all(|k| k.nrows() == wide.rank()));
+    }
+
+    #[test]
     fn increments_from_groups_and_from_products_equal_direct_ones() {
         let n = 300;
         let (x, y, w) = problem(n);
