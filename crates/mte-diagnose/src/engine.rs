@@ -1740,15 +1740,16 @@ impl Searcher<'_> {
         // Variants whose columns a refinement changed (not the pool's: no products).
         let mut refined: std::collections::HashSet<(usize, usize)> = Default::default();
 
-        // The fit of the base and the completions that joined it: the model's fits extend it.
+        // The fit of the base and the completions that joined it (the search's result).
         let mut late_fit = Cow::Borrowed(base_fit);
+        // The variants' products with the base's directions (see below).
         let mut stable_qc: Option<DMat> = None;
         let last = loop {
-            // (The base and its completions alone: their fit itself.)
-            let projector = if x.ncols() == late_fit.design_columns() {
-                late_fit.clone()
+            // (The base alone: its fit itself.)
+            let projector = if x.ncols() == base_fit.design_columns() {
+                Cow::Borrowed(base_fit)
             } else {
-                Cow::Owned(late_fit.extended_to(&x))
+                Cow::Owned(base_fit.extended_to(&x))
             };
             // With causes in, a completion the causes' size hid may show: it joins the base
             // before the next cause is sought. (The causes' periods and time constants are not
@@ -1760,10 +1761,9 @@ impl Searcher<'_> {
                     &terms[self.base.len()..],
                     &projector,
                     &mut completion_rows,
-                    late_fit.rank(),
+                    base_fit.rank(),
                 ) {
                     late_fit = Cow::Owned(late_fit.extended(&t.columns));
-                    stable_qc = None;
                     late.push(t);
                     terms = model_terms(&late, &chosen);
                     x = design(&terms.iter().collect::<Vec<_>>(), obs.len());
@@ -1772,12 +1772,12 @@ impl Searcher<'_> {
             }
             let rss = projector.rss_w();
             // Every variant's `Qᵀ W c`, from the products; a variant a refinement changed is
-            // projected directly. The rows of the base's and its completions' directions are
-            // the same at every step until a completion joins: formed once.
+            // projected directly. The rows of the base's directions are the same at every step
+            // (every fit of the search extends the base's): formed once.
             let xtc =
                 self.pool
                     .model_products(&products.x, &terms[self.base.len()..], w, &mut formed);
-            let stable = late_fit.rank();
+            let stable = base_fit.rank();
             let stable_rows =
                 stable_qc.get_or_insert_with(|| projector.basis_products_of(0..stable, &xtc));
             let mut qc = DMat::zeros(projector.rank(), xtc.ncols());
@@ -2077,7 +2077,7 @@ impl Searcher<'_> {
                     base: &base,
                     ..*self
                 }
-                .refit_scanned(&mut chosen, &late_fit);
+                .refit_scanned(&mut chosen, base_fit);
             }
             terms = model_terms(&late, &chosen);
             x = design(&terms.iter().collect::<Vec<_>>(), obs.len());
@@ -2087,7 +2087,7 @@ impl Searcher<'_> {
             base: &base,
             ..*self
         }
-        .prune(&mut chosen, folds, &late_fit, last);
+        .prune(&mut chosen, folds, base_fit, last);
         SearchResult {
             completed: late,
             completed_fit: late_fit.into_owned(),
@@ -3034,9 +3034,9 @@ const EQUIVALENT_PAIRS: usize = 3;
 /// Pairs of drifts of other parameters, with the same time dependence, that together give the
 /// readings the drift finding `term` gives: beyond the rest of the final model (its fit
 /// `rest`), all but [`EQUIVALENT_DRIFT_SHARE`] of its effect is theirs, and neither alone holds
-/// it. On an R-test the ball sees only the tool relative to the
-/// table: the lines of both rotary axes drifting together in X are the tool drifting the other
-/// way. The pairs' names, in the library's order, at most [`EQUIVALENT_PAIRS`].
+/// it. On an R-test the ball sees only the tool relative to the table: the lines of both rotary
+/// axes drifting together in X are the tool drifting the other way. The pairs' names, in the
+/// library's order, at most [`EQUIVALENT_PAIRS`].
 fn equivalent_drifts(
     obs: &Observations,
     rest: &Projector,
@@ -3383,9 +3383,9 @@ fn period_and_span(obs: &Observations, t: &Term) -> Option<(f64, f64)> {
 }
 
 /// The local optima of the profile of the periodic term `term` of the final model (solution
-/// `sol`; `projector`: the fit of the model without it) over its candidate's grid, away from the chosen period by more
-/// than the Fourier resolution, whose fit is within [`MODE_CHI2`] of the chosen one's; best
-/// first. Every grid optimum within [`PEAK_SHARE`] of the chosen period's fit is refined (at
+/// `sol`; `projector`: the fit of the model without it) over its candidate's grid, away from
+/// the chosen period by more than the Fourier resolution, whose fit is within [`MODE_CHI2`] of
+/// the chosen one's; best first. Every grid optimum within [`PEAK_SHARE`] of the chosen period's fit is refined (at
 /// most [`MAX_MODES`]): at few positions a periodic error has many aliases, and the grid alone
 /// cannot rank them.
 fn period_modes(
