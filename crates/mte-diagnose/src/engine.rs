@@ -615,7 +615,7 @@ pub fn diagnose(
     // wait for the outer folds either.
     let (concluded, held_out) = rayon::join(
         || {
-            let search = searcher.search(&w_s, &folds_s, None, base_fit.clone());
+            let (search, _) = searcher.search(&w_s, &folds_s, None, base_fit.clone());
             conclude(
                 obs,
                 &base,
@@ -1541,8 +1541,6 @@ struct Chosen {
 struct SearchResult {
     /// Higher orders of the base's component errors the data asked for.
     completed: Vec<Term>,
-    /// The fit of the searcher's base and `completed`.
-    completed_fit: Projector,
     chosen: Vec<Chosen>,
     steps: Vec<Step>,
     not_separable: Vec<NotSeparable>,
@@ -1584,14 +1582,14 @@ impl Searcher<'_> {
     /// no part: those of the outer fold `held_out` (`None`: the search on all data, which also
     /// records which candidates the data cannot separate from the base, for the report; an
     /// outer fold's search only needs its causes). `base_fit`: the fit of the base under the
-    /// weights `w`.
+    /// weights `w`. With the search's result, the fit of the base and the completions it found.
     fn search(
         &self,
         w: &DVec,
         folds: &Folds,
         held_out: Option<usize>,
         base_fit: Projector,
-    ) -> SearchResult {
+    ) -> (SearchResult, Projector) {
         let mut completed: Vec<Term> = Vec::new();
         let mut fit = base_fit;
         let mut rows = CompletionRows::default();
@@ -1605,9 +1603,12 @@ impl Searcher<'_> {
             ..*self
         }
         .search_causes(w, folds, held_out, &fit, rows);
+        for t in &found.completed {
+            fit = fit.extended(&t.columns);
+        }
         completed.append(&mut found.completed);
         found.completed = completed;
-        found
+        (found, fit)
     }
 
     /// The next completion of the model whose fit is `fit` (its terms: the base's and
@@ -1740,8 +1741,6 @@ impl Searcher<'_> {
         // Variants whose columns a refinement changed (not the pool's: no products).
         let mut refined: std::collections::HashSet<(usize, usize)> = Default::default();
 
-        // The fit of the base and the completions that joined it (the search's result).
-        let mut late_fit = Cow::Borrowed(base_fit);
         // The variants' products with the base's directions (see below).
         let mut stable_qc: Option<DMat> = None;
         let last = loop {
@@ -1763,7 +1762,6 @@ impl Searcher<'_> {
                     &mut completion_rows,
                     base_fit.rank(),
                 ) {
-                    late_fit = Cow::Owned(late_fit.extended(&t.columns));
                     late.push(t);
                     terms = model_terms(&late, &chosen);
                     x = design(&terms.iter().collect::<Vec<_>>(), obs.len());
@@ -2090,7 +2088,6 @@ impl Searcher<'_> {
         .prune(&mut chosen, folds, base_fit, last);
         SearchResult {
             completed: late,
-            completed_fit: late_fit.into_owned(),
             chosen,
             steps,
             not_separable,
@@ -2578,7 +2575,8 @@ impl Searcher<'_> {
                     self.params.blocks_per_fold,
                 );
                 let fold_fit = base_fit.without_rows(test, &obs.values);
-                let found = self.search(&w_train, &inner, Some(fold), fold_fit.clone());
+                let (found, completed_fit) =
+                    self.search(&w_train, &inner, Some(fold), fold_fit.clone());
                 // The fits of the training rows (the held-out ones have weight zero), extended
                 // from the fold's base fit; their predictions at the held-out rows.
                 let completed: Vec<Term> =
@@ -2590,7 +2588,6 @@ impl Searcher<'_> {
                 // As the final model does, the causes that rest on the base's orders alone leave.
                 let mut chosen = found.chosen;
                 let x_base = design(&completed.iter().collect::<Vec<_>>(), n);
-                let completed_fit = found.completed_fit;
                 let (x, fit) = searcher.drop_resting_on_orders(&mut chosen, &completed_fit);
                 let held_out_residuals = |x: &DMat, fit: &Projector| -> Vec<f64> {
                     let coef = fit.coefficients(&obs.values);
@@ -3385,9 +3382,9 @@ fn period_and_span(obs: &Observations, t: &Term) -> Option<(f64, f64)> {
 /// The local optima of the profile of the periodic term `term` of the final model (solution
 /// `sol`; `projector`: the fit of the model without it) over its candidate's grid, away from
 /// the chosen period by more than the Fourier resolution, whose fit is within [`MODE_CHI2`] of
-/// the chosen one's; best first. Every grid optimum within [`PEAK_SHARE`] of the chosen period's fit is refined (at
-/// most [`MAX_MODES`]): at few positions a periodic error has many aliases, and the grid alone
-/// cannot rank them.
+/// the chosen one's; best first. Every grid optimum within [`PEAK_SHARE`] of the chosen
+/// period's fit is refined (at most [`MAX_MODES`]): at few positions a periodic error has many
+/// aliases, and the grid alone cannot rank them.
 fn period_modes(
     obs: &Observations,
     projector: &Projector,
