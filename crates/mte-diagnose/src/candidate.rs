@@ -1226,7 +1226,8 @@ pub(crate) fn varies(v: &[f64]) -> bool {
     hi > lo
 }
 
-fn format_period(p: f64, rotary: bool) -> String {
+/// A period as the report names it: mm along a linear axis, degrees of a turn.
+pub(crate) fn format_period(p: f64, rotary: bool) -> String {
     if rotary {
         format!("{:.1}°", p.to_degrees())
     } else {

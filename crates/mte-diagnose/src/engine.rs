@@ -896,6 +896,8 @@ fn conclude(
     // A period the positions cannot pin down: other periods that fit about as well widen the
     // amplitude's uncertainty and are named. (A long record samples densely: not needed there.)
     let mut ambiguity_notes = Vec::new();
+    // Findings whose period these positions cannot tell from others (by name).
+    let mut ambiguous: Vec<String> = Vec::new();
     if thinned.is_none() {
         for (k, c) in chosen.iter().enumerate() {
             let modes = period_modes(obs, &rests[k], &sol, &c.term, searcher.chosen_candidate(c));
@@ -906,7 +908,14 @@ fn conclude(
             else {
                 continue;
             };
+            let rotary = h.quantity == Quantity::AxisAngle;
             let f = &mut findings[k];
+            ambiguous.push(f.name.clone());
+            let amplitude_quantity = f
+                .estimates
+                .iter()
+                .find(|e| e.name == "amplitude")
+                .map_or(Quantity::Length, |e| e.quantity);
             if let Some(amp) = f.estimates.iter_mut().find(|e| e.name == "amplitude") {
                 let weights: Vec<f64> = modes.iter().map(|m| (-0.5 * m.delta_chi2).exp()).collect();
                 let spread = modes
@@ -926,17 +935,9 @@ fn conclude(
                 .map(|m| {
                     format!(
                         "{} (Δχ² = {:.1}, amplitude {})",
-                        h.quantity
-                            .format(m.period, 0.0)
-                            .split(" ±")
-                            .next()
-                            .unwrap_or_default(),
+                        crate::candidate::format_period(m.period, rotary),
                         m.delta_chi2,
-                        Quantity::Length
-                            .format(m.amplitude, 0.0)
-                            .split(" ±")
-                            .next()
-                            .unwrap_or_default()
+                        amplitude_quantity.format_value(m.amplitude)
                     )
                 })
                 .collect();
@@ -944,11 +945,7 @@ fn conclude(
                 format!(
                     "{} at a period of {}",
                     f.name,
-                    h.quantity
-                        .format(m.period, 0.0)
-                        .split(" ±")
-                        .next()
-                        .unwrap_or_default()
+                    crate::candidate::format_period(m.period, rotary)
                 )
             }));
             let more = match modes.len().saturating_sub(NAMED) {
@@ -1081,6 +1078,10 @@ fn conclude(
             &searcher, &chosen, &terms, w, s2, &covered,
         ));
     }
+    let covered: Vec<String> = compound.iter().flat_map(|c| c.findings.clone()).collect();
+    compound.extend(periodic_shapes(
+        &searcher, &chosen, &fit, &covered, &ambiguous,
+    ));
     let drifts = compound_drifts(&findings, change);
     let covered: Vec<String> = drifts.iter().flat_map(|c| c.findings.clone()).collect();
     compound.extend(drifts);
@@ -1093,8 +1094,8 @@ fn conclude(
         params.alpha,
         &covered,
     ));
-    notes.extend(compound.iter().map(|c| c.note.clone()));
     notes.extend(ambiguity_notes);
+    notes.extend(compound.iter().map(|c| c.note.clone()));
     let residual_series = residual_series(
         obs,
         &findings,
@@ -2040,8 +2041,10 @@ impl Searcher<'_> {
             times_chosen[ci] += 1;
             let recurs = matches!(term.family, Family::Periodic { .. })
                 && times_chosen[ci] < MAX_PERIODIC_COMPONENTS;
+            // (By the pool's name: a second component is named `… #2`.)
+            let pool_name = &self.pool.variants[ci][0].name;
             for (cj, variants) in self.pool.variants.iter().enumerate() {
-                if variants[0].name == term.name {
+                if variants[0].name == *pool_name {
                     used[cj] = true;
                 }
             }
@@ -2642,12 +2645,12 @@ fn f_test(rss: f64, delta_rss: f64, k: usize, dof: usize) -> f64 {
 /// ratio of two unrelated periods (the ratio's tolerance grows with the order).
 const MAX_HARMONIC_ORDER: f64 = 6.0;
 
-/// Periodic findings of one axis whose periods are the first's divided by 2, 3, … (at most
-/// [`MAX_HARMONIC_ORDER`]) and whose amplitudes are not larger than the first's: harmonics of
-/// one periodic error that is not a sine (a sawtooth, a pitch error with a sharp profile, whose
-/// harmonics fall off — a sawtooth's as 1/k), said in one sentence so the reader does not take
-/// them for independent causes. A component stronger than the wave it would belong to is not
-/// its harmonic.
+/// Periodic findings of one linear axis whose periods are the first's divided by 2, 3, … (at
+/// most [`MAX_HARMONIC_ORDER`]) and whose amplitudes are not larger than the first's: harmonics
+/// of one periodic error that is not a sine (a sawtooth, a pitch error with a sharp profile,
+/// whose harmonics fall off — a sawtooth's as 1/k), said in one sentence so the reader does not
+/// take them for independent causes. A component stronger than the wave it would belong to is
+/// not its harmonic.
 fn harmonic_families(findings: &[Finding]) -> Vec<Compound> {
     let amplitude = |f: &Finding| {
         f.estimates
@@ -2655,11 +2658,14 @@ fn harmonic_families(findings: &[Finding]) -> Vec<Compound> {
             .find(|e| e.name == "amplitude")
             .map(|e| (e.value.abs(), e.uncertainty))
     };
+    // (Along a rotary axis every error is a function over a turn and its harmonics are the
+    // candidates' own form: they are not grouped.)
     let mut periodic: Vec<(&Finding, f64, f64)> = findings
         .iter()
         .filter_map(|f| {
             let h = f.hyper_parameter.as_ref()?;
-            matches!(f.family, Family::Periodic { .. }).then_some((f, h.value, h.uncertainty))
+            (matches!(f.family, Family::Periodic { .. }) && h.quantity != Quantity::AxisAngle)
+                .then_some((f, h.value, h.uncertainty))
         })
         .collect();
     // Longest period first: the search may find a harmonic before its fundamental.
@@ -2714,17 +2720,125 @@ fn harmonic_families(findings: &[Finding]) -> Vec<Compound> {
     notes
 }
 
-/// Periodic components of one cause whose periods are no simple fractions of each other, yet
-/// may be a single periodic error that is not a sine: at irregular but coarse positions a
-/// sawtooth's harmonics show at alias periods, which [`harmonic_families`]'s ratio test cannot
-/// see. For each group of two or more periodic components of one candidate (not already in a
-/// family), the fundamental of a series of harmonics 1..K (K up to [`MAX_HARMONIC_ORDER`]) is
-/// scanned over the cause's periods and refined at the series' resolution; the group is said to
-/// be one non-sine error of that period when the series' Akaike criterion (χ² in units of the
-/// final model's σ0² plus twice its parameters: two per harmonic and the period) is no larger
-/// than the components' own (three each). Failing that, when two or more components are shorter
-/// than twice the mean step between the positions, the report says that these positions cannot
-/// tell one non-sine error from independent ones. The components stay as found.
+/// Highest harmonic [`periodic_shapes`] tests: a sawtooth's 4th has a quarter of its
+/// fundamental's amplitude, and higher ones alias onto lower ones at the spacings of practice.
+const SHAPE_HARMONICS: usize = 4;
+
+/// Periodic findings along a linear axis (free period, not in a family: `covered`) whose shape
+/// the data say is not a sine, or cannot say. Two cases, each said in one sentence:
+/// - the series of its harmonics 2..K at the finding's period (K = 2 to [`SHAPE_HARMONICS`],
+///   nested) explains significantly more once the final model (`fit`) holds the finding (F test,
+///   Bonferroni over the findings and series tested, at [`COMPLETION_LEVEL`]: a statement about
+///   the shape of a cause already earned, which like a completion costs little when wrong and
+///   leaves a confident wrong shape when missed). A sawtooth seen at positions too few for its
+///   harmonics to be found as causes of their own (each scanned over every period) comes out as
+///   one sine whose period its harmonics' aliases may pull;
+/// - else, when its period is one of several that fit about as well (`ambiguous`, by name) and
+///   shorter than twice the mean step between the positions: there a sine of a free period fits
+///   a periodic error of almost any period and shape, and the finding names the axis' periodic
+///   error, not its period or shape.
+fn periodic_shapes(
+    searcher: &Searcher<'_>,
+    chosen: &[Chosen],
+    fit: &Projector,
+    covered: &[String],
+    ambiguous: &[String],
+) -> Vec<Compound> {
+    let obs = searcher.obs;
+    let tested: Vec<(&Chosen, f64)> = chosen
+        .iter()
+        .filter(|c| !covered.contains(&c.term.name) && !exposed_by_rotary(obs, &c.term))
+        .filter_map(|c| match c.term.family {
+            Family::Periodic { period } => Some((c, period)),
+            _ => None,
+        })
+        .collect();
+    let tests = (tested.len() * (SHAPE_HARMONICS - 1)) as f64;
+    tested
+        .into_iter()
+        .filter_map(|(c, period)| {
+            let candidate = searcher.chosen_candidate(c);
+            let harmonics: Vec<DMat> = (2..=SHAPE_HARMONICS)
+                .map_while(|h| candidate.at(c.variant, period / h as f64).map(|t| t.columns))
+                .collect();
+            let series = (2..=harmonics.len() + 1)
+                .map(|k| {
+                    let columns = harmonics[..k - 1]
+                        .iter()
+                        .cloned()
+                        .reduce(|a, b| hcat(&a, &b))
+                        .expect("one harmonic");
+                    let inc = fit.increment(&columns);
+                    let p = f_test(fit.rss_w(), inc.delta_rss, inc.new_rank, fit.dof());
+                    ((p * tests).min(1.0), k)
+                })
+                .min_by(|a, b| a.0.total_cmp(&b.0));
+            let name = &c.term.name;
+            let note = match series {
+                Some((p, k)) if p < COMPLETION_LEVEL => format!(
+                    "{name} is one wave of a periodic error of period about {} that is not a sine (a sawtooth or sharp-profiled pitch error): {} significantly more ({}); the amplitude and period stated are those of the sine closest to it, and its harmonics' aliases at these positions may pull the period",
+                    Quantity::Distance.format_value(period),
+                    if k == 2 {
+                        "its 2nd harmonic explains".to_string()
+                    } else {
+                        format!("its harmonics 2–{k} explain")
+                    },
+                    crate::report::p_text(p)
+                ),
+                _ => {
+                    let (v, count, step) = position_step(obs, &[&c.term])?;
+                    if !(ambiguous.contains(name) && period < 2.0 * step) {
+                        return None;
+                    }
+                    format!(
+                        "{name} stands for a periodic error of {} whose period and shape these data do not determine: at {count} positions a mean step of {} apart, a sine of a period shorter than twice the step fits about as well at several periods, and so would a periodic error of another shape (a sawtooth, a stepped scale) seen through aliases; positions at a finer spacing would tell them apart",
+                        v.name,
+                        Quantity::Distance.format_value(step)
+                    )
+                }
+            };
+            Some(Compound {
+                note,
+                findings: vec![name.clone()],
+                estimate: None,
+            })
+        })
+        .collect()
+}
+
+/// The variable that exposes the terms `terms` (the first's), the number of its distinct values
+/// where any of them acts and the mean step between those values.
+fn position_step<'o>(
+    obs: &'o Observations,
+    terms: &[&Term],
+) -> Option<(&'o crate::data::Variable, usize, f64)> {
+    let v = obs.variable(terms.first()?.exposed_by.as_deref()?)?;
+    let mut positions: Vec<f64> = (0..obs.len())
+        .filter(|&i| {
+            terms
+                .iter()
+                .any(|t| t.columns.row(i).iter().any(|x| *x != 0.0))
+        })
+        .map(|i| v.values[i])
+        .collect();
+    positions.sort_by(f64::total_cmp);
+    positions.dedup_by(|a, b| (*a - *b).abs() < 1e-9);
+    let step = (positions.last()? - positions.first()?) / (positions.len().max(2) - 1) as f64;
+    Some((v, positions.len(), step))
+}
+
+/// Periodic components of one cause along a linear axis whose periods are no simple fractions
+/// of each other, yet may be a single periodic error that is not a sine: at irregular but
+/// coarse positions a sawtooth's harmonics show at alias periods, which [`harmonic_families`]'s
+/// ratio test cannot see. For each group of two or more periodic components of one candidate
+/// (not already in a family), the fundamental of a series of harmonics 1..K (K up to
+/// [`MAX_HARMONIC_ORDER`]) is scanned over the cause's periods and refined at the series'
+/// resolution; the group is said to be one non-sine error of that period when the series'
+/// Akaike criterion (χ² in units of the final model's σ0² plus twice its parameters: two per
+/// harmonic and the period) is no larger than the components' own (three each). Failing that,
+/// when two or more components are shorter than twice the mean step between the positions, the
+/// report says that these positions cannot tell one non-sine error from independent ones. The
+/// components stay as found.
 fn aliased_harmonic_families(
     searcher: &Searcher<'_>,
     chosen: &[Chosen],
@@ -2738,7 +2852,10 @@ fn aliased_harmonic_families(
     let base_len = terms.len() - chosen.len();
     let mut groups: BTreeMap<usize, Vec<usize>> = BTreeMap::new();
     for (k, c) in chosen.iter().enumerate() {
-        if matches!(c.term.family, Family::Periodic { .. }) && !covered.contains(&c.term.name) {
+        if matches!(c.term.family, Family::Periodic { .. })
+            && !covered.contains(&c.term.name)
+            && !exposed_by_rotary(obs, &c.term)
+        {
             groups.entry(c.candidate).or_default().push(k);
         }
     }
@@ -2837,43 +2954,21 @@ fn aliased_harmonic_families(
             }
         }
         let names: Vec<String> = group.iter().map(|&k| chosen[k].term.name.clone()).collect();
-        let variable = obs.variable(c.term.exposed_by.as_deref().unwrap_or_default());
-        let quantity = if variable.is_some_and(|v| v.kind == crate::VariableKind::RotaryAxis) {
-            Quantity::AxisAngle
-        } else {
-            Quantity::Distance
-        };
-        let (scale, unit) = quantity.report_unit();
-        let shown = |v: f64| {
-            let d = crate::term::significant_decimals(v * scale / 100.0);
-            format!("{:.*} {unit}", d, v * scale)
-        };
+        let quantity = Quantity::Distance;
         let note = match best.filter(|b| b.0 <= aic_found) {
             Some((aic, period, harmonics)) => format!(
                 "{} may be one periodic error of period {} that is not a sine (a sawtooth or sharp-profiled pitch error): the series of its harmonics 1–{harmonics} fits these data as well (Akaike criterion {aic:.1} against {aic_found:.1}), and at these positions its harmonics show at the periods found (aliases); positions at a finer or different spacing would tell the two readings apart",
                 names.join(", "),
-                shown(period)
+                quantity.format_value(period)
             ),
             None => {
                 // Two or more components shorter than twice the mean step between the
                 // positions: a non-sine error's harmonics alias there, and a few sines at free
                 // periods fit almost any error at so few positions.
-                let Some(v) = variable else {
+                let terms: Vec<&Term> = group.iter().map(|&k| &chosen[k].term).collect();
+                let Some((v, count, step)) = position_step(obs, &terms) else {
                     continue;
                 };
-                let rows = |k: usize| {
-                    let t = &chosen[k].term.columns;
-                    (0..n).filter(move |&i| t.row(i).iter().any(|x| *x != 0.0))
-                };
-                let mut positions: Vec<f64> = group
-                    .iter()
-                    .flat_map(|&k| rows(k))
-                    .map(|i| v.values[i])
-                    .collect();
-                positions.sort_by(f64::total_cmp);
-                positions.dedup_by(|a, b| (*a - *b).abs() < 1e-9);
-                let step = (positions[positions.len() - 1] - positions[0])
-                    / (positions.len().max(2) - 1) as f64;
                 let short = group
                     .iter()
                     .filter(|&&k| {
@@ -2886,9 +2981,9 @@ fn aliased_harmonic_families(
                 format!(
                     "{} may be one periodic error that is not a sine (a sawtooth, a stepped scale) seen through aliases, or independent periodic errors: at {} positions of {} a mean step of {} apart, periods below twice the step are aliases of each other and of a non-sine error's harmonics, and a few sines at free periods fit almost any error there; positions at a finer spacing would tell them apart",
                     names.join(", "),
-                    positions.len(),
+                    count,
                     v.name,
-                    shown(step)
+                    quantity.format_value(step)
                 )
             }
         };
@@ -3850,9 +3945,10 @@ const REFINE_LEVEL: f64 = 1e3;
 const MAX_PERIODIC_COMPONENTS: usize = 3;
 
 /// `true` when the periodic term `t` of candidate `candidate` has a period within the Fourier
-/// resolution (1 / range of its axis) of a component of the same cause already chosen (other
-/// than `skip`): two such components are one wave with a slowly changing amplitude, not two
-/// causes, and their sizes would split one effect.
+/// resolution (1 / range of its axis; along a rotary axis, the same harmonic of a turn) of a
+/// component of the same cause already chosen (other than `skip`): two such components are one
+/// wave with a slowly changing amplitude, not two causes, and their sizes would split one
+/// effect.
 fn near_a_component(
     obs: &Observations,
     t: &Term,
@@ -3863,11 +3959,19 @@ fn near_a_component(
     let Some((period, span)) = period_and_span(obs, t) else {
         return false;
     };
+    // Along a rotary axis the periods are harmonics of a turn, which a turn's data tell apart
+    // however close in frequency (the Fourier resolution of the span would merge the 1st and
+    // 2nd): near means the same harmonic.
+    let resolution = if exposed_by_rotary(obs, t) {
+        0.5 / std::f64::consts::TAU
+    } else {
+        1.0 / span
+    };
     chosen.iter().enumerate().any(|(k, c)| {
         Some(k) != skip
             && c.candidate == candidate
             && matches!(c.term.family, Family::Periodic { period: q }
-                if (1.0 / period - 1.0 / q).abs() < 1.0 / span)
+                if (1.0 / period - 1.0 / q).abs() < resolution)
     })
 }
 

@@ -81,6 +81,13 @@ impl Quantity {
         }
     }
 
+    /// A value without uncertainty in the reported unit, to three significant digits.
+    pub fn format_value(self, value: f64) -> String {
+        let (f, unit) = self.report_unit();
+        let digits = significant_decimals((value * f).abs() / 10.0);
+        format!("{:.*} {unit}", digits, value * f)
+    }
+
     /// The value in the reported unit, with arcsec alongside for angles.
     pub fn format(self, value: f64, u: f64) -> String {
         let (f, unit) = self.report_unit();
