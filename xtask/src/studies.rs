@@ -30,6 +30,8 @@ pub struct FoundEffect {
     pub estimates: Vec<(String, f64, f64)>,
     /// The alternatives the diagnosis reports it cannot separate from this finding.
     pub alternatives: Vec<String>,
+    /// Its period (mm along a linear axis, rad of a turn), for a periodic finding.
+    pub period: Option<f64>,
 }
 
 /// What the diagnosis returned for one dataset.
@@ -51,6 +53,9 @@ pub struct Outcome {
     /// Groups of findings the diagnosis says are one effect of a form no candidate has
     /// ([`mte_diagnose::Diagnosis::compound`]).
     pub compound: usize,
+    /// The findings such groups hold, and those whose shape (period and form) the diagnosis says
+    /// the data do not determine: findings whose form the report qualifies.
+    pub qualified: Vec<String>,
     /// Readings the diagnosis lists as outliers ([`mte_diagnose::Diagnosis::outliers`]).
     pub outliers: usize,
     /// The sizes the diagnosis states for such groups where it states one: the findings and
@@ -139,6 +144,10 @@ pub fn run_one(spec: &Spec, index: usize, seed: u64, work: &Path) -> Record {
                 .map(|f| FoundEffect {
                     name: f.name.clone(),
                     alternatives: f.alternatives.clone(),
+                    period: match f.family {
+                        mte_diagnose::Family::Periodic { period } => Some(period),
+                        _ => None,
+                    },
                     estimates: f
                         .estimates
                         .iter()
@@ -153,6 +162,11 @@ pub fn run_one(spec: &Spec, index: usize, seed: u64, work: &Path) -> Record {
                 * 1e3,
             verdict: d.verdict,
             compound: d.compound.len(),
+            qualified: d
+                .compound
+                .iter()
+                .flat_map(|c| c.findings.iter().cloned())
+                .collect(),
             outliers: d.outliers.len(),
             compound_sizes: d
                 .compound
@@ -470,6 +484,11 @@ pub fn power_plan() -> Vec<(Kind, Effect, Vec<f64>)> {
             Effect::PivotDrift,
             vec![5.0, 10.0, 20.0, 30.0],
         ),
+        (
+            Kind::Points,
+            Effect::AngularPositioning,
+            vec![5.0, 10.0, 20.0, 30.0],
+        ),
     ]
 }
 
@@ -492,6 +511,7 @@ pub fn openworld_plan() -> Vec<(Kind, Effect, f64)> {
         (Kind::Tracker, Effect::Sawtooth, 3.0),
         (Kind::Tracker, Effect::TwoAxis, 5.0),
         (Kind::Rtest, Effect::RiseFall, 15.0),
+        (Kind::Points, Effect::TwoAxis, 5.0),
     ]
 }
 
@@ -614,6 +634,10 @@ pub struct PowerCell {
     /// For a drift, of those named right, datasets whose stated change over the measured time
     /// is within 2 u of the truth's ([`change_matches`]); `None` for other effects.
     pub change_within_2u: Option<usize>,
+    /// Of those named right, datasets where the report qualifies the form of the finding that
+    /// names it (one effect of a form no candidate has, or a shape the data do not determine:
+    /// [`Outcome::qualified`]).
+    pub form_qualified: usize,
     /// Datasets whose findings all name the effect (no other cause) and whose verdict is that
     /// the causes found explain the data.
     pub alone_explained: usize,
@@ -624,13 +648,16 @@ pub struct PowerCell {
 /// The user's model of a power cell: the standard model (every ordinary error,
 /// [`BaseModel::standard`]) less the errors that would already hold the hidden effect
 /// (`except`), with the errors an R-test cannot tell from them: for a squareness cell the XY
-/// squareness (`EC0Y`, `EC0X`) and the orientation of the B line about Z (`EC0B`); for an
+/// squareness (`EC0Y`, `EC0X`) and the orientation of the B line about Z (`EC0B`, on machines
+/// with a B axis); for an
 /// angular positioning cell the angular positioning error of C (`ECC`); for a B tilt the tilt
 /// (`EA0B`), B's error motion about X (`EAB`, whose harmonics over B's range hold most of a
 /// constant tilt) and the YZ squareness (`EA0Y`, `EA0Z`). A finding then names one of them and
 /// lists the others as not separable. What the user's model lacks is what a diagnosis can find.
-pub fn user_model_lacking(_kind: Kind, effect: Effect) -> BaseModel {
+pub fn user_model_lacking(kind: Kind, effect: Effect) -> BaseModel {
     let except: &[&str] = match effect {
+        // (The points machine has no B.)
+        Effect::Squareness if kind == Kind::Points => &["EC0Y", "EC0X"],
         Effect::Squareness => &["EC0Y", "EC0X", "EC0B"],
         Effect::AngularPositioning => &["ECC"],
         Effect::BTilt => &["EA0B", "EAB", "EA0Y", "EA0Z"],
@@ -690,6 +717,7 @@ pub fn power_with(
                 below_limit: 0,
                 estimate_within_2u: 0,
                 change_within_2u: None,
+                form_qualified: 0,
                 alone_explained: 0,
                 names: Vec::new(),
             };
@@ -711,6 +739,7 @@ pub fn power_with(
                         if let Some(hit) = change_matches(truth, f, o, 2.0) {
                             *c.change_within_2u.get_or_insert(0) += usize::from(hit);
                         }
+                        c.form_qualified += usize::from(o.qualified.contains(&f.name));
                         c.alone_explained += usize::from(
                             o.verdict == mte_diagnose::Verdict::Explained
                                 && o.findings.iter().all(|f| names_effect(truth, &f.name)),
@@ -747,7 +776,18 @@ pub enum Account<'o> {
 
 /// [`Account`] of the hidden effect `truth` in the outcome `o`.
 pub fn account<'o>(truth: &TrueEffect, o: &'o Outcome) -> Account<'o> {
-    if let Some(f) = o.findings.iter().find(|f| names_effect(truth, &f.name)) {
+    let mut naming = o.findings.iter().filter(|f| names_effect(truth, &f.name));
+    // Of several findings naming a periodic effect (a rotary axis' ordinary harmonics beside the
+    // hidden one), the one nearest its frequency; else the first.
+    let nearest = truth.period.as_ref().and_then(|(_, p)| {
+        o.findings
+            .iter()
+            .filter(|f| names_effect(truth, &f.name))
+            .filter_map(|f| Some((f, (1.0 / f.period? - 1.0 / p).abs())))
+            .min_by(|a, b| a.1.total_cmp(&b.1))
+            .map(|(f, _)| f)
+    });
+    if let Some(f) = nearest.or_else(|| naming.next()) {
         return Account::Named(f);
     }
     let listed = truth.kind == EffectKind::InstrumentScale
@@ -1075,13 +1115,13 @@ pub fn combined(
 fn power_table(s: &mut String, cells: &[PowerCell]) {
     let _ = writeln!(
         s,
-        "| kind | effect | size | datasets | errors | any finding | named right | else reported as not separable | else period stated out of reach | else stated below detection limit | within 2 u | drift: change over the measured time within 2 u | named alone, explained | most frequent findings |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"
+        "| kind | effect | size | datasets | errors | any finding | named right | else reported as not separable | else period stated out of reach | else stated below detection limit | within 2 u | drift: change over the measured time within 2 u | named, form qualified | named alone, explained | most frequent findings |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"
     );
     for c in cells {
         let ran = c.n - c.errors;
         let _ = writeln!(
             s,
-            "| {} | {} | {} {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |",
+            "| {} | {} | {} {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |",
             c.kind.name(),
             c.effect.name(),
             c.size,
@@ -1096,6 +1136,7 @@ fn power_table(s: &mut String, cells: &[PowerCell]) {
             pct(c.estimate_within_2u, c.named_right),
             c.change_within_2u
                 .map_or("–".into(), |k| pct(k, c.named_right)),
+            pct(c.form_qualified, c.named_right),
             pct(c.alone_explained, ran),
             top(&c.names, 3)
         );
@@ -1167,7 +1208,8 @@ location errors 5–40 µm and \
 10–100 µrad, rotary error motions 1–5 µm / 2–20 µrad periodic over a turn, small linear-axis errors; \
 3-D points: a C table with X, Y, Z stages, every component error of X, Y, Z, three squareness \
 errors, the C line's location errors and C's six error motions, measured from two unknown \
-instrument poses with a calibrated target, clean datasets only), \
+instrument poses with a calibrated target at 12 angles of C and 5 × 4 × 3 positions of X, Y, \
+Z), \
 and noise whose σ is drawn per dataset (interferometer 0.1–0.6 µm, tracker 0.2–1.0 µm, R-test \
 0.2–0.8 µm, 3-D points 0.5–2 µm; the manifest, or for R-test the `noise_um` passed to `load_with_noise`, states the true \
 σ rounded to 0.1 µm). Machines, strokes, programmes and instrument placement are drawn per dataset \
@@ -1184,7 +1226,11 @@ move only along the ball's path, so their component errors and the rotary error 
 almost any function of the angles): with the hidden B tilt's or squareness's own errors left out \
 it still fits such datasets to the noise, and those cells show what an R-test can tell a user of \
 the full model about them: nothing. An R-test finds a B tilt against the location-only model of \
-R-test practice (`tests/rtest.rs` in mte-diagnose).\n",
+R-test practice (`tests/rtest.rs` in mte-diagnose). On 3-D points the full model is not \
+degenerate that way, but it has no squareness a point grid could show apart from the yaw of an \
+axis (its lever arm to the target) and the instrument's pose: its power cell is C's angular \
+positioning, against the model without `ECC`, which lacks C's ordinary error motion about Z \
+too (harmonics 1–3 of a turn, a few µrad): findings of those harmonics name `ECC` as well.\n",
         r.command, r.base_seed
     );
     if !r.fdr.is_empty() {
@@ -1266,7 +1312,11 @@ estimate is a rate, counts as outside); *drift: change over the measured time wi
 for a drift, of those named right, |stated − true| ≤ 2 u for the drift's change from the first \
 reading to the last — the finding's *change over the measured time*, or, where the report says \
 that drift findings of the parameter are one drift of neither form, their change together: the \
-drift's size whatever form it is found in; *named alone, \
+drift's size whatever form it is found in; *named, form qualified*: of those named right, the \
+share whose naming finding the report qualifies — one effect with other findings of a form no \
+candidate has (a periodic error that is not a sine, a drift of neither form), or a periodic \
+error whose period and shape the positions do not determine — right for the open world's \
+effects, a caveat too many for a sine or a drift of the candidates' own form; *named alone, \
 explained*: of all datasets, those where the effect is named right, no finding names anything \
 else, and the verdict is that the causes found explain the data (residuals consistent with the \
 noise, no structure left) — what a user should see. Pitch periods \

@@ -145,6 +145,18 @@ fn an_error_of_two_axes_at_once_is_reported_as_unexplained_structure() {
     );
 }
 
+#[test]
+fn a_sawtooth_is_never_a_sine_declared_to_explain_the_data() {
+    // Open world on interferometer runs: a sawtooth positioning error of X (period 20–80 mm,
+    // 15–25 irregular targets over 0.5–1 m) on top of every ordinary error. Found as one sine, as sines at
+    // its harmonics or at their aliases: the report must say that they are one error that is
+    // not a sine, or that the positions determine neither its period nor its shape.
+    let o = studies::openworld(Kind::Axis, Effect::Sawtooth, 2.0, 8, SEED);
+    assert_eq!(o.errors, 0);
+    assert_eq!(o.nothing, 0, "{:?}", o.names);
+    assert_eq!(o.confident_wrong, 0, "{:?}", o.names);
+}
+
 /// A sawtooth pitch error (open world: no candidate has its shape) comes out as periodic
 /// components at the period and its fractions, or at aliases of them on the irregular target
 /// spacing; either way the report says they may be one non-sinusoidal error. A sinusoidal pitch
@@ -321,5 +333,33 @@ fn a_pitch_a_reversal_and_a_drift_at_once_are_each_named_and_nothing_else() {
         c.label(),
         c.within_2u,
         c.effects_named
+    );
+}
+
+#[test]
+fn c_angular_positioning_on_3d_points_is_found_at_its_harmonic() {
+    // 3-D points of a C table against the user's model without C's angular positioning (ECC):
+    // the hidden harmonic and C's ordinary error motion about Z (harmonics 1–3 of a turn) are
+    // all ECC's. Harmonics of a turn are told apart however close in frequency (the 1st and the
+    // 2nd), so the hidden one is found at its own harmonic, not at an alias, and sized.
+    let cells = studies::power(Kind::Points, Effect::AngularPositioning, &[20.0], 4, SEED);
+    let c = &cells[0];
+    assert_eq!(c.errors, 0);
+    assert_eq!(c.named_right, c.n, "{:?}", c.names);
+    assert!(c.estimate_within_2u + 1 >= c.n, "{:?}", c.names);
+}
+
+#[test]
+fn a_cause_takes_at_most_three_periodic_components() {
+    // A sawtooth on tracker data with scattered targets shows many harmonics; one cause holds
+    // at most three periodic components (pitch, a longer wave, a harmonic), each named once:
+    // what the rest leaves is structure the report states, not a fourth sine.
+    let o = studies::openworld(Kind::Tracker, Effect::Sawtooth, 3.0, 3, SEED);
+    assert_eq!(o.errors, 0);
+    assert_eq!(o.confident_wrong, 0, "{:?}", o.names);
+    assert!(
+        o.names.iter().all(|(name, _)| !name.contains(" #4")),
+        "{:?}",
+        o.names
     );
 }

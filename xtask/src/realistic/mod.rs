@@ -45,7 +45,7 @@ pub enum Kind {
     /// (`mte-rtest/1`).
     RtestHead,
     /// 3-D points of a target on the spindle of a C-table machine with X, Y, Z stages
-    /// (`mte-dataset/1`, `"kind": "points"`), clean datasets only.
+    /// (`mte-dataset/1`, `"kind": "points"`).
     Points,
 }
 
@@ -85,7 +85,7 @@ pub enum Hidden {
         /// Period, mm.
         period_mm: f64,
     },
-    /// Squareness between two linear axes beyond the ordinary one, µrad (tracker, rtest).
+    /// Squareness between two linear axes beyond the ordinary one, µrad (tracker, rtest, points).
     /// `pair`: 0 = EC0Y (Y to X), 1 = EA0Z (Z to Y), 2 = EB0Z (Z to X).
     Squareness {
         /// Which squareness.
@@ -119,7 +119,7 @@ pub enum Hidden {
         um_per_min: f64,
     },
     /// Angular positioning error of a rotary axis as a harmonic of a turn:
-    /// `urad · sin(k·θ + φ)` (rtest; `rotary` 1 = C).
+    /// `urad · sin(k·θ + φ)` (rtest; points, where `rotary` must be 1 = C).
     AngularPositioning {
         /// Rotary axis 0 = B, 1 = C.
         rotary: usize,
@@ -154,7 +154,7 @@ pub enum Hidden {
     },
     /// Open world: a Y positioning error growing linearly from mid-Y, at a rate that changes
     /// along X (a table warmed unevenly stretches Y more on one side): a smooth shape of x with
-    /// peak `um` at the ends of Y (tracker). (An X straightness growing linearly with Z would
+    /// peak `um` at the ends of Y (tracker, points). (An X straightness growing linearly with Z would
     /// not do: that is the roll of X through the Z lever arm, which the standard model has.)
     TwoAxis {
         /// Peak, µm.

@@ -184,27 +184,28 @@ fn machine_json() -> serde_json::Value {
     })
 }
 
-/// A clean realistic points dataset of the same machine (for the false-discovery study): every
-/// ordinary error at once — the six component errors of each of X, Y and Z as random smooth
-/// functions, the three squareness errors between them, the C line's four location errors and
-/// C's six error motions (periodic over a turn) — measured on a richer programme (12 angles of
-/// C, 5 × 4 × 3 positions of X, Y, Z, two instrument set-ups) with a calibrated target. Hidden
-/// effects are not available for this kind.
+/// A realistic points dataset of the same machine: every ordinary error at once — the six
+/// component errors of each of X, Y and Z as random smooth functions, the three squareness
+/// errors between them, the C line's four location errors and C's six error motions (periodic
+/// over a turn) — measured on a richer programme (12 angles of C, 5 × 4 × 3 positions of X, Y,
+/// Z, two instrument set-ups) with a calibrated target; on top, the hidden effects of
+/// `spec`: a squareness beyond the ordinary one, an angular positioning error of C at one
+/// harmonic of a turn (on top of C's ordinary error motion about Z), or (open world) a Y
+/// positioning error growing from mid-Y at a rate that changes along X. Their random parts are
+/// drawn after every ordinary error: a clean dataset is the same with or without this option.
 pub(crate) fn write(
     spec: &super::Spec,
     rng: &mut ChaCha8Rng,
     dir: &Path,
 ) -> std::io::Result<super::Truth> {
     use super::geom::{LinearErrors, REALISTIC};
-    use super::smooth::Periodic;
-    if let Some(h) = spec.hidden.first() {
-        return Err(super::unsupported(super::Kind::Points, h));
-    }
+    use super::smooth::{Periodic, Smooth};
+    use super::{EffectKind, Hidden, TrueEffect};
     let s = spec.ordinary_scale;
     let strokes = [(-300.0, 300.0), (-300.0, 300.0), (-300.0, 100.0)];
     let [ex, ey, ez] =
         [0, 1, 2].map(|k| LinearErrors::draw(rng, k, strokes[k].0, strokes[k].1, REALISTIC, s));
-    let squareness = [0; 3].map(|_| signed(rng, 5.0, 60.0) * 1e-6 * s);
+    let mut squareness = [0; 3].map(|_| signed(rng, 5.0, 60.0) * 1e-6 * s);
     let (dx, dy) = (
         signed(rng, 10.0, 40.0) * 1e-3 * s,
         signed(rng, 10.0, 40.0) * 1e-3 * s,
@@ -227,6 +228,73 @@ pub(crate) fn write(
         rng.random_range(-30.0..30.0),
         rng.random_range(-60.0..-20.0),
     );
+    let mut effects = Vec::new();
+    // C's angular positioning error beyond its ordinary error motion about Z: (rad, k, phase).
+    let mut angular: Option<(f64, f64, f64)> = None;
+    // A Y positioning error of peak mm at the ends of Y, its size a smooth shape of x.
+    let mut two_axis: Option<(f64, Smooth)> = None;
+    for h in &spec.hidden {
+        match *h {
+            Hidden::Squareness { pair, urad } if pair < 3 => {
+                squareness[pair] += urad * 1e-6;
+                effects.push(TrueEffect {
+                    iso_name_hint: ["EC0Y", "EA0Z", "EB0Z"][pair].into(),
+                    kind: EffectKind::Squareness,
+                    size: urad,
+                    unit: "urad",
+                    value: squareness[pair].abs(),
+                    signed: false,
+                    period: None,
+                    detail: String::new(),
+                    record_change: None,
+                });
+            }
+            Hidden::AngularPositioning {
+                rotary: 1,
+                harmonic,
+                urad,
+            } => {
+                let (k, phase) = (
+                    harmonic as f64,
+                    rng.random_range(0.0..std::f64::consts::TAU),
+                );
+                angular = Some((urad * 1e-6, k, phase));
+                // The machine's angular positioning error at this harmonic: the hidden one plus
+                // the ordinary error motion's component.
+                let (a, b) = motion_e[2].component(k);
+                let total = (a + urad * 1e-6 * phase.cos()).hypot(b + urad * 1e-6 * phase.sin());
+                effects.push(TrueEffect {
+                    iso_name_hint: "ECC".into(),
+                    kind: EffectKind::AngularPositioning,
+                    size: urad,
+                    unit: "urad",
+                    value: total,
+                    signed: false,
+                    period: Some(("C".into(), std::f64::consts::TAU / k)),
+                    detail: format!("harmonic {harmonic} of a turn"),
+                    record_change: None,
+                });
+            }
+            Hidden::TwoAxis { um } => {
+                two_axis = Some((
+                    um * 1e-3,
+                    Smooth::draw(rng, strokes[0].0, strokes[0].1, 1.0),
+                ));
+                effects.push(TrueEffect {
+                    iso_name_hint: "EYY".into(),
+                    kind: EffectKind::OpenWorld,
+                    size: um,
+                    unit: "um",
+                    value: um.abs() * 1e-3,
+                    signed: false,
+                    period: None,
+                    detail: "Y positioning error changing along X".into(),
+                    record_change: None,
+                });
+            }
+            _ => return Err(super::unsupported(super::Kind::Points, h)),
+        }
+    }
     // Tool side: bed → Y → (squareness) → X → (squareness) → Z → tool, each carriage moved by
     // its nominal translation, then its error transform.
     let tool = |x: f64, y: f64, z: f64| -> Iso {
@@ -245,7 +313,12 @@ pub(crate) fn write(
     let table = |c_deg: f64| -> Iso {
         let c = c_deg.to_radians();
         let d = V3::new(motion_d[0].at(c), motion_d[1].at(c), motion_d[2].at(c));
-        let e = V3::new(motion_e[0].at(c), motion_e[1].at(c), motion_e[2].at(c));
+        let extra = angular.map_or(0.0, |(amp, k, phase)| amp * (k * c + phase).sin());
+        let e = V3::new(
+            motion_e[0].at(c),
+            motion_e[1].at(c),
+            motion_e[2].at(c) + extra,
+        );
         trans(V3::new(dx, dy, 0.0)) * rot(V3::new(a, b, 0.0)) * rot_z(-c) * trans(d) * rot(e)
     };
     let noise = Normal::new(0.0, (noise_um * 1e-3).max(1e-300)).expect("finite σ");
@@ -261,7 +334,11 @@ pub(crate) fn write(
         true,
         (noise_um > 0.0).then_some(&noise),
         &|x, y, z, c| {
-            let p = tool(x, y, z).transform_point(&target_mm.into());
+            let mut p = tool(x, y, z).transform_point(&target_mm.into());
+            if let Some((peak, shape)) = &two_axis {
+                let (lo, hi) = strokes[1];
+                p.y += peak * shape.at(x) * (2.0 * (y - lo) / (hi - lo) - 1.0);
+            }
             table(c).inverse_transform_point(&p).coords
         },
     );
@@ -284,7 +361,7 @@ pub(crate) fn write(
     Ok(super::Truth {
         kind: super::Kind::Points,
         manifest: path,
-        effects: Vec::new(),
+        effects,
         ordinary: Vec::new(),
         noise_um,
         stations: Vec::new(),
