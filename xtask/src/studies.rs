@@ -1335,12 +1335,13 @@ u; with n datasets the binomial standard error is about √(0.05·0.95/n)). R-te
 (τ drawn from 600 to 3 600 s): a first-order drift's own size is its asymptote, beyond the data, \
 and a drift slow against the record is found as a linear one, whose estimate is a rate (outside \
 under *within 2 u*). The change over the measured time, which the report states for every \
-drift, is the size the data determine whatever the form found: read that column. Its misses are \
-mostly drifts faster than the interval between repeated visits of a pose (one programme cycle, \
-about 900–1 600 s here), the shortest time constant the diagnosis searches: such a drift \
-settles before any pose is seen twice, is found at that floor (with a linear one beside it, \
-which the report says are one drift of neither form), and its first minutes are not in the \
-stated change — the report's note says that the drift may be faster and its change larger.\n"
+drift, is the size the data determine whatever the form found: read that column. The drifts \
+searched settle no faster than a third of the interval between repeated visits of a pose (one \
+programme cycle, about 900–1 600 s here): the differences between a pose's consecutive visits, \
+from the first pose of a cycle to the last, trace a faster drift's settling too (with the \
+interval itself as the shortest time constant, the change's coverage in this cell was 92 %, its \
+misses drifts faster than the cycle, found at that floor with their first minutes left out of \
+the stated change).\n"
         );
         power_table(&mut s, &r.coverage);
     }

@@ -232,8 +232,8 @@ fn distinct_sorted(values: &[f64]) -> Vec<f64> {
 }
 
 /// Time constants to scan for a first-order thermal drift: log-spaced from 1/20 of the time span
-/// of the data (but never below `floor`, the interval between repeated visits of a pose, which
-/// a faster drift could not be told from a dependence on the pose by) to twice the span.
+/// of the data (but never below `floor`, set by the interval between repeated visits of a pose:
+/// `candidate::shortest_time_constant`) to twice the span.
 pub(crate) fn time_constants_to_scan(times: &[f64], floor: f64) -> Vec<f64> {
     let (lo, hi) = range(times);
     let span = hi - lo;

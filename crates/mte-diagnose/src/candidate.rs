@@ -297,12 +297,17 @@ pub fn physical_effects(
 ) -> Vec<Box<dyn Candidate>> {
     let mut out: Vec<Box<dyn Candidate>> = Vec::new();
     // Time effects only where a pose is measured again later: otherwise a drift cannot be told
-    // from a dependence on the pose, and its time constant cannot be shorter than the interval
-    // between the visits that reveal it.
+    // from a dependence on the pose. Its time constant may be shorter than the interval between
+    // the visits that reveal it, down to a fraction of it ([`shortest_time_constant`]).
     let time = obs
         .variable_of_kind(VariableKind::Time)
         .filter(|t| varies(&t.values))
-        .and_then(|t| Some((t.values.clone(), obs.revisit_interval()?)));
+        .and_then(|t| {
+            Some((
+                t.values.clone(),
+                shortest_time_constant(obs.revisit_interval()?),
+            ))
+        });
     let direction = obs
         .variable_of_kind(VariableKind::Direction)
         .filter(|d| varies(&d.values))
@@ -1224,6 +1229,17 @@ fn column_matrix(c: &DVec) -> DMat {
 pub(crate) fn varies(v: &[f64]) -> bool {
     let (lo, hi) = crate::basis::range(v);
     hi > lo
+}
+
+/// The shortest time constant a first-order drift is searched at, where a pose is revisited
+/// every `revisit` s. A pose-independent drift shows in the differences between a pose's
+/// consecutive visits; the poses of one programme cycle are visited one after another, so these
+/// differences, from the first pose's to the last's, trace how the drift settles over the cycle
+/// even when it settles faster than the cycle: a time constant of a third of it leaves the last
+/// pose e^−3 = 5 % of the first's difference. Faster than that, the drift is over before most
+/// poses are seen twice.
+pub(crate) fn shortest_time_constant(revisit: f64) -> f64 {
+    revisit / 3.0
 }
 
 /// A period as the report names it: mm along a linear axis, degrees of a turn.

@@ -1086,13 +1086,7 @@ fn conclude(
     let covered: Vec<String> = drifts.iter().flat_map(|c| c.findings.clone()).collect();
     compound.extend(drifts);
     compound.extend(drift_shapes(
-        obs,
-        candidates,
-        &chosen,
-        &terms,
-        &fit,
-        params.alpha,
-        &covered,
+        obs, candidates, &chosen, &terms, &fit, &covered,
     ));
     notes.extend(ambiguity_notes);
     notes.extend(compound.iter().map(|c| c.note.clone()));
@@ -3215,8 +3209,9 @@ fn drifts_at_the_shortest(searcher: &Searcher<'_>, chosen: &[Chosen]) -> Vec<Str
                 .filter_map(tau_of)
                 .fold(f64::INFINITY, f64::min);
             (tau <= 1.01 * shortest).then(|| {
-                let why = if obs.revisit_interval() == Some(shortest) {
-                    "the interval between two visits of a pose, below which a drift cannot be told from a dependence on the pose"
+                let revisit = obs.revisit_interval();
+                let why = if revisit.map(crate::candidate::shortest_time_constant) == Some(shortest) {
+                    "a third of the interval between two visits of a pose, below which the drift is over before most poses are seen twice"
                 } else {
                     "a twentieth of the measured time"
                 };
@@ -3290,16 +3285,16 @@ fn drift_change(
 
 /// Drifts found in one form (linear or first-order) whose course the data say is another: a
 /// smooth curve of the same parameter in time (its column times Legendre polynomials of degree
-/// 1–4 in t) still explains significantly more once the final model holds them (F test at
-/// `alpha`, Bonferroni over the drifts tested; `fit`: the final model's). Said in one sentence:
-/// the finding describes a drift of that parameter, not its course.
+/// 1–4 in t) still explains significantly more once the final model holds them (F test,
+/// Bonferroni over the drifts tested, at [`COMPLETION_LEVEL`] as for a periodic finding's shape
+/// in [`periodic_shapes`]; `fit`: the final model's). Said in one sentence: the finding
+/// describes a drift of that parameter, not its course.
 fn drift_shapes(
     obs: &Observations,
     candidates: &[Box<dyn Candidate>],
     chosen: &[Chosen],
     terms: &[Term],
     fit: &Projector,
-    alpha: f64,
     covered: &[String],
 ) -> Vec<Compound> {
     let Some(t) = obs.variable_of_kind(crate::data::VariableKind::Time) else {
@@ -3332,7 +3327,7 @@ fn drift_shapes(
             let p = (f_test(fit.rss_w(), inc.delta_rss, inc.new_rank, fit.dof())
                 * drifts.len() as f64)
                 .min(1.0);
-            (inc.new_rank > 0 && p < alpha).then(|| Compound {
+            (inc.new_rank > 0 && p < COMPLETION_LEVEL).then(|| Compound {
                 note: format!(
                     "{} describes a drift of {stem} whose course is neither linear nor a first-order settling (it may rise and fall): a smooth curve of {stem} in time explains significantly more ({}); the estimate holds over the measured time only",
                     d.name,
