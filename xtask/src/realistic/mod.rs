@@ -360,6 +360,49 @@ pub(crate) fn unsupported(kind: Kind, h: &Hidden) -> std::io::Error {
     )
 }
 
+/// The open-world [`Hidden::TwoAxis`] effect drawn for X's stroke `x_stroke`: a Y positioning
+/// error of `um` µm at the ends of Y whose size is a smooth shape of x ([`TwoAxis::at`]), and
+/// its truth.
+pub(crate) fn two_axis(
+    rng: &mut impl rand::Rng,
+    um: f64,
+    x_stroke: (f64, f64),
+) -> (TwoAxis, TrueEffect) {
+    let effect = TwoAxis {
+        peak_mm: um * 1e-3,
+        shape: smooth::Smooth::draw(rng, x_stroke.0, x_stroke.1, 1.0),
+    };
+    let truth = TrueEffect {
+        iso_name_hint: "EYY".into(),
+        kind: EffectKind::OpenWorld,
+        size: um,
+        unit: "um",
+        value: um.abs() * 1e-3,
+        signed: false,
+        period: None,
+        detail: "Y positioning error changing along X".into(),
+        record_change: None,
+    };
+    (effect, truth)
+}
+
+/// A Y positioning error proportional to the distance from mid-Y whose size changes along X
+/// (peak at the ends of Y, shape of x): no rigid-body error of the axes has it (a yaw of Y gives
+/// x·f(y), a yaw of X moves the tip along X in proportion to Y).
+#[derive(Debug, Clone)]
+pub struct TwoAxis {
+    peak_mm: f64,
+    shape: smooth::Smooth,
+}
+
+impl TwoAxis {
+    /// The Y error at (x, y), mm, for Y's stroke `y_stroke`.
+    pub fn at(&self, x: f64, y: f64, y_stroke: (f64, f64)) -> f64 {
+        let (lo, hi) = y_stroke;
+        self.peak_mm * self.shape.at(x) * (2.0 * (y - lo) / (hi - lo) - 1.0)
+    }
+}
+
 /// Sawtooth of period 1 in `u`, between −1 and 1.
 pub(crate) fn sawtooth(u: f64) -> f64 {
     2.0 * (u - u.floor()) - 1.0

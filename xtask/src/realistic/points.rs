@@ -199,7 +199,7 @@ pub(crate) fn write(
     dir: &Path,
 ) -> std::io::Result<super::Truth> {
     use super::geom::{LinearErrors, REALISTIC};
-    use super::smooth::{Periodic, Smooth};
+    use super::smooth::Periodic;
     use super::{EffectKind, Hidden, TrueEffect};
     let s = spec.ordinary_scale;
     let strokes = [(-300.0, 300.0), (-300.0, 300.0), (-300.0, 100.0)];
@@ -231,8 +231,7 @@ pub(crate) fn write(
     let mut effects = Vec::new();
     // C's angular positioning error beyond its ordinary error motion about Z: (rad, k, phase).
     let mut angular: Option<(f64, f64, f64)> = None;
-    // A Y positioning error of peak mm at the ends of Y, its size a smooth shape of x.
-    let mut two_axis: Option<(f64, Smooth)> = None;
+    let mut two_axis: Option<super::TwoAxis> = None;
     for h in &spec.hidden {
         match *h {
             Hidden::Squareness { pair, urad } if pair < 3 => {
@@ -276,21 +275,9 @@ pub(crate) fn write(
                 });
             }
             Hidden::TwoAxis { um } => {
-                two_axis = Some((
-                    um * 1e-3,
-                    Smooth::draw(rng, strokes[0].0, strokes[0].1, 1.0),
-                ));
-                effects.push(TrueEffect {
-                    iso_name_hint: "EYY".into(),
-                    kind: EffectKind::OpenWorld,
-                    size: um,
-                    unit: "um",
-                    value: um.abs() * 1e-3,
-                    signed: false,
-                    period: None,
-                    detail: "Y positioning error changing along X".into(),
-                    record_change: None,
-                });
+                let (e, truth) = super::two_axis(rng, um, strokes[0]);
+                two_axis = Some(e);
+                effects.push(truth);
             }
             _ => return Err(super::unsupported(super::Kind::Points, h)),
         }
@@ -335,9 +322,8 @@ pub(crate) fn write(
         (noise_um > 0.0).then_some(&noise),
         &|x, y, z, c| {
             let mut p = tool(x, y, z).transform_point(&target_mm.into());
-            if let Some((peak, shape)) = &two_axis {
-                let (lo, hi) = strokes[1];
-                p.y += peak * shape.at(x) * (2.0 * (y - lo) / (hi - lo) - 1.0);
+            if let Some(e) = &two_axis {
+                p.y += e.at(x, y, strokes[1]);
             }
             table(c).inverse_transform_point(&p).coords
         },

@@ -18,7 +18,7 @@ use rand_distr::{Distribution, Normal};
 
 use super::axis::stated_noise_um;
 use super::geom::{Iso, LinearErrors, REALISTIC, V3, rot_x, rot_y, rot_z, trans};
-use super::smooth::{Smooth, signed};
+use super::smooth::signed;
 use super::{
     EffectKind, Hidden, Kind, LINEAR, Spec, TrueEffect, Truth, sawtooth, unsupported,
     write_manifest,
@@ -66,10 +66,8 @@ pub struct TrackerMachine {
     pub squareness: [f64; 3],
     /// Extra positioning errors per axis.
     pub waves: [Vec<Wave>; 3],
-    /// Open world: a Y positioning error proportional to the distance from mid-Y whose size
-    /// changes along X (peak mm at the ends of Y, shape of x): no rigid-body error of the axes
-    /// has it (a yaw of Y gives x·f(y), a yaw of X moves the tip along X in proportion to Y).
-    pub two_axis: Option<(f64, Smooth)>,
+    /// Open world: a Y positioning error growing from mid-Y at a rate that changes along X.
+    pub two_axis: Option<super::TwoAxis>,
 }
 
 impl TrackerMachine {
@@ -126,9 +124,8 @@ impl TrackerMachine {
         let mut p = (self.workpiece_in_bed(q).inverse() * self.tool_in_bed(q))
             .translation
             .vector;
-        if let Some((peak, shape)) = &self.two_axis {
-            let (lo, hi) = self.strokes[1];
-            p.y += peak * shape.at(q[0]) * (2.0 * (q[1] - lo) / (hi - lo) - 1.0);
+        if let Some(e) = &self.two_axis {
+            p.y += e.at(q[0], q[1], self.strokes[1]);
         }
         p
     }
@@ -321,19 +318,9 @@ pub(crate) fn write(spec: &Spec, rng: &mut ChaCha8Rng, dir: &Path) -> std::io::R
                 });
             }
             Hidden::TwoAxis { um } => {
-                let shape = Smooth::draw(rng, strokes[0].0, strokes[0].1, 1.0);
-                m.two_axis = Some((um * 1e-3, shape));
-                effects.push(TrueEffect {
-                    iso_name_hint: "EYY".into(),
-                    kind: EffectKind::OpenWorld,
-                    size: um,
-                    unit: "um",
-                    value: um.abs() * 1e-3,
-                    signed: false,
-                    period: None,
-                    detail: "Y positioning error changing along X".into(),
-                    record_change: None,
-                });
+                let (e, truth) = super::two_axis(rng, um, strokes[0]);
+                m.two_axis = Some(e);
+                effects.push(truth);
             }
             _ => return Err(unsupported(Kind::Tracker, h)),
         }
