@@ -53,8 +53,8 @@ pub struct Outcome {
     /// Groups of findings the diagnosis says are one effect of a form no candidate has
     /// ([`mte_diagnose::Diagnosis::compound`]).
     pub compound: usize,
-    /// The findings such groups hold, and those whose shape (period and form) the diagnosis says
-    /// the data do not determine: findings whose form the report qualifies.
+    /// The findings of those groups: the findings whose form the report qualifies (one effect
+    /// of a form no candidate has, or a period and shape the data do not determine).
     pub qualified: Vec<String>,
     /// Readings the diagnosis lists as outliers ([`mte_diagnose::Diagnosis::outliers`]).
     pub outliers: usize,
@@ -649,10 +649,9 @@ pub struct PowerCell {
 /// [`BaseModel::standard`]) less the errors that would already hold the hidden effect
 /// (`except`), with the errors an R-test cannot tell from them: for a squareness cell the XY
 /// squareness (`EC0Y`, `EC0X`) and the orientation of the B line about Z (`EC0B`, on machines
-/// with a B axis); for an
-/// angular positioning cell the angular positioning error of C (`ECC`); for a B tilt the tilt
-/// (`EA0B`), B's error motion about X (`EAB`, whose harmonics over B's range hold most of a
-/// constant tilt) and the YZ squareness (`EA0Y`, `EA0Z`). A finding then names one of them and
+/// with a B axis); for an angular positioning cell the angular positioning error of C (`ECC`);
+/// for a B tilt the tilt (`EA0B`), B's error motion about X (`EAB`, whose harmonics over B's
+/// range hold most of a constant tilt) and the YZ squareness (`EA0Y`, `EA0Z`). A finding then names one of them and
 /// lists the others as not separable. What the user's model lacks is what a diagnosis can find.
 pub fn user_model_lacking(kind: Kind, effect: Effect) -> BaseModel {
     let except: &[&str] = match effect {
@@ -776,18 +775,21 @@ pub enum Account<'o> {
 
 /// [`Account`] of the hidden effect `truth` in the outcome `o`.
 pub fn account<'o>(truth: &TrueEffect, o: &'o Outcome) -> Account<'o> {
-    let mut naming = o.findings.iter().filter(|f| names_effect(truth, &f.name));
+    let naming: Vec<&FoundEffect> = o
+        .findings
+        .iter()
+        .filter(|f| names_effect(truth, &f.name))
+        .collect();
     // Of several findings naming a periodic effect (a rotary axis' ordinary harmonics beside the
     // hidden one), the one nearest its frequency; else the first.
     let nearest = truth.period.as_ref().and_then(|(_, p)| {
-        o.findings
+        naming
             .iter()
-            .filter(|f| names_effect(truth, &f.name))
-            .filter_map(|f| Some((f, (1.0 / f.period? - 1.0 / p).abs())))
+            .filter_map(|f| Some((*f, (1.0 / f.period? - 1.0 / p).abs())))
             .min_by(|a, b| a.1.total_cmp(&b.1))
             .map(|(f, _)| f)
     });
-    if let Some(f) = nearest.or_else(|| naming.next()) {
+    if let Some(f) = nearest.or(naming.first().copied()) {
         return Account::Named(f);
     }
     let listed = truth.kind == EffectKind::InstrumentScale
