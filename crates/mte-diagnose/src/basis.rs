@@ -224,7 +224,8 @@ pub(crate) fn alias_period(positions: &[f64], shortest: f64) -> Option<f64> {
     None
 }
 
-fn distinct_sorted(values: &[f64]) -> Vec<f64> {
+/// The distinct values of `values` (closer than 1e-9 count as one), sorted.
+pub(crate) fn distinct_sorted(values: &[f64]) -> Vec<f64> {
     let mut sorted: Vec<f64> = values.to_vec();
     sorted.sort_by(f64::total_cmp);
     sorted.dedup_by(|a, b| (*a - *b).abs() < 1e-9);

@@ -2807,7 +2807,7 @@ fn position_step<'o>(
     terms: &[&Term],
 ) -> Option<(&'o crate::data::Variable, usize, f64)> {
     let v = obs.variable(terms.first()?.exposed_by.as_deref()?)?;
-    let mut positions: Vec<f64> = (0..obs.len())
+    let acting: Vec<f64> = (0..obs.len())
         .filter(|&i| {
             terms
                 .iter()
@@ -2815,8 +2815,7 @@ fn position_step<'o>(
         })
         .map(|i| v.values[i])
         .collect();
-    positions.sort_by(f64::total_cmp);
-    positions.dedup_by(|a, b| (*a - *b).abs() < 1e-9);
+    let positions = crate::basis::distinct_sorted(&acting);
     let step = (positions.last()? - positions.first()?) / (positions.len().max(2) - 1) as f64;
     Some((v, positions.len(), step))
 }
