@@ -148,9 +148,10 @@ fn an_error_of_two_axes_at_once_is_reported_as_unexplained_structure() {
 #[test]
 fn a_sawtooth_is_never_a_sine_declared_to_explain_the_data() {
     // Open world on interferometer runs: a sawtooth positioning error of X (period 20–80 mm,
-    // 15–25 irregular targets over 0.5–1 m) on top of every ordinary error. Found as one sine, as sines at
-    // its harmonics or at their aliases: the report must say that they are one error that is
-    // not a sine, or that the positions determine neither its period nor its shape.
+    // 15–25 irregular targets over 0.5–1 m) on top of every ordinary error. Found as one sine,
+    // as sines at its harmonics or at their aliases: the report must say that they are one
+    // error that is not a sine, or that the positions determine neither its period nor its
+    // shape.
     let o = studies::openworld(Kind::Axis, Effect::Sawtooth, 2.0, 8, SEED);
     assert_eq!(o.errors, 0);
     assert_eq!(o.nothing, 0, "{:?}", o.names);
@@ -337,11 +338,11 @@ fn a_pitch_a_reversal_and_a_drift_at_once_are_each_named_and_nothing_else() {
 }
 
 #[test]
-fn c_angular_positioning_on_3d_points_is_found_at_its_harmonic() {
+fn c_angular_positioning_on_3d_points_is_named_and_sized() {
     // 3-D points of a C table against the user's model without C's angular positioning (ECC):
     // the hidden harmonic and C's ordinary error motion about Z (harmonics 1–3 of a turn) are
-    // all ECC's. Harmonics of a turn are told apart however close in frequency (the 1st and the
-    // 2nd), so the hidden one is found at its own harmonic, not at an alias, and sized.
+    // all ECC's. The hidden one is named and, by the ECC finding nearest its frequency, sized
+    // within 2 u (one miss of four allowed).
     let cells = studies::power(Kind::Points, Effect::AngularPositioning, &[20.0], 4, SEED);
     let c = &cells[0];
     assert_eq!(c.errors, 0);

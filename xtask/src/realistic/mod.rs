@@ -360,6 +360,54 @@ pub(crate) fn unsupported(kind: Kind, h: &Hidden) -> std::io::Error {
     )
 }
 
+/// ISO names of the squareness errors [`Hidden::Squareness`] numbers 0, 1, 2.
+pub(crate) const SQUARENESS: [&str; 3] = ["EC0Y", "EA0Z", "EB0Z"];
+
+/// The truth of a hidden squareness `pair` of `urad` µrad whose machine's total (ordinary +
+/// hidden) is `total_rad`.
+pub(crate) fn squareness_truth(pair: usize, urad: f64, total_rad: f64) -> TrueEffect {
+    TrueEffect {
+        iso_name_hint: SQUARENESS[pair].into(),
+        kind: EffectKind::Squareness,
+        size: urad,
+        unit: "urad",
+        value: total_rad.abs(),
+        signed: false,
+        period: None,
+        detail: String::new(),
+        record_change: None,
+    }
+}
+
+/// A hidden angular positioning error of rotary axis `rotary` (0 = B, 1 = C) at `harmonic`
+/// cycles per turn, `urad` µrad, on top of the axis' ordinary error motion about its own line
+/// `ordinary`: the drawn `(amplitude rad, harmonic, phase)` of `amplitude · sin(k·θ + φ)` and
+/// its truth, the amplitude of the machine's total at that harmonic.
+pub(crate) fn angular_positioning(
+    rng: &mut impl rand::Rng,
+    ordinary: &smooth::Periodic,
+    rotary: usize,
+    harmonic: u32,
+    urad: f64,
+) -> ((f64, f64, f64), TrueEffect) {
+    use std::f64::consts::TAU;
+    let (k, phase) = (harmonic as f64, rng.random_range(0.0..TAU));
+    let (a, b) = ordinary.component(k);
+    let total = (a + urad * 1e-6 * phase.cos()).hypot(b + urad * 1e-6 * phase.sin());
+    let truth = TrueEffect {
+        iso_name_hint: ["EBB", "ECC"][rotary].into(),
+        kind: EffectKind::AngularPositioning,
+        size: urad,
+        unit: "urad",
+        value: total,
+        signed: false,
+        period: Some((["B", "C"][rotary].into(), TAU / k)),
+        detail: format!("harmonic {harmonic} of a turn"),
+        record_change: None,
+    };
+    ((urad * 1e-6, k, phase), truth)
+}
+
 /// The open-world [`Hidden::TwoAxis`] effect drawn for X's stroke `x_stroke`: a Y positioning
 /// error of `um` µm at the ends of Y whose size is a smooth shape of x ([`TwoAxis::at`]), and
 /// its truth.

@@ -198,9 +198,9 @@ pub(crate) fn write(
     rng: &mut ChaCha8Rng,
     dir: &Path,
 ) -> std::io::Result<super::Truth> {
+    use super::Hidden;
     use super::geom::{LinearErrors, REALISTIC};
     use super::smooth::Periodic;
-    use super::{EffectKind, Hidden, TrueEffect};
     let s = spec.ordinary_scale;
     let strokes = [(-300.0, 300.0), (-300.0, 300.0), (-300.0, 100.0)];
     let [ex, ey, ez] =
@@ -236,43 +236,17 @@ pub(crate) fn write(
         match *h {
             Hidden::Squareness { pair, urad } if pair < 3 => {
                 squareness[pair] += urad * 1e-6;
-                effects.push(TrueEffect {
-                    iso_name_hint: ["EC0Y", "EA0Z", "EB0Z"][pair].into(),
-                    kind: EffectKind::Squareness,
-                    size: urad,
-                    unit: "urad",
-                    value: squareness[pair].abs(),
-                    signed: false,
-                    period: None,
-                    detail: String::new(),
-                    record_change: None,
-                });
+                effects.push(super::squareness_truth(pair, urad, squareness[pair]));
             }
             Hidden::AngularPositioning {
                 rotary: 1,
                 harmonic,
                 urad,
             } => {
-                let (k, phase) = (
-                    harmonic as f64,
-                    rng.random_range(0.0..std::f64::consts::TAU),
-                );
-                angular = Some((urad * 1e-6, k, phase));
-                // The machine's angular positioning error at this harmonic: the hidden one plus
-                // the ordinary error motion's component.
-                let (a, b) = motion_e[2].component(k);
-                let total = (a + urad * 1e-6 * phase.cos()).hypot(b + urad * 1e-6 * phase.sin());
-                effects.push(TrueEffect {
-                    iso_name_hint: "ECC".into(),
-                    kind: EffectKind::AngularPositioning,
-                    size: urad,
-                    unit: "urad",
-                    value: total,
-                    signed: false,
-                    period: Some(("C".into(), std::f64::consts::TAU / k)),
-                    detail: format!("harmonic {harmonic} of a turn"),
-                    record_change: None,
-                });
+                let (drawn, truth) =
+                    super::angular_positioning(rng, &motion_e[2], 1, harmonic, urad);
+                angular = Some(drawn);
+                effects.push(truth);
             }
             Hidden::TwoAxis { um } => {
                 let (e, truth) = super::two_axis(rng, um, strokes[0]);

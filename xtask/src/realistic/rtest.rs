@@ -419,23 +419,17 @@ pub(crate) fn write(spec: &Spec, rng: &mut ChaCha8Rng, dir: &Path) -> std::io::R
                 harmonic,
                 urad,
             } if rotary < 2 => {
-                let (k, phase) = (harmonic as f64, rng.random_range(0.0..TAU));
-                m.rotary[rotary].harmonic = Some((urad * 1e-6, k, phase));
-                // The machine's angular positioning error at this harmonic: the hidden one plus
-                // the ordinary error motion's component (B: about Y, C: about Z).
-                let (a, b) = m.rotary[rotary].e[rotary + 1].component(k);
-                let total = (a + urad * 1e-6 * phase.cos()).hypot(b + urad * 1e-6 * phase.sin());
-                effects.push(TrueEffect {
-                    iso_name_hint: ["EBB", "ECC"][rotary].into(),
-                    kind: EffectKind::AngularPositioning,
-                    size: urad,
-                    unit: "urad",
-                    value: total,
-                    signed: false,
-                    period: Some((["B", "C"][rotary].into(), TAU / harmonic as f64)),
-                    detail: format!("harmonic {harmonic} of a turn"),
-                    record_change: None,
-                });
+                // On top of the ordinary error motion about the axis' own line (B: about Y, C:
+                // about Z).
+                let (drawn, truth) = super::angular_positioning(
+                    rng,
+                    &m.rotary[rotary].e[rotary + 1],
+                    rotary,
+                    harmonic,
+                    urad,
+                );
+                m.rotary[rotary].harmonic = Some(drawn);
+                effects.push(truth);
             }
             Hidden::BTilt { urad } => {
                 m.location.ea0b += urad * 1e-6;
@@ -453,17 +447,7 @@ pub(crate) fn write(spec: &Spec, rng: &mut ChaCha8Rng, dir: &Path) -> std::io::R
             }
             Hidden::Squareness { pair, urad } if pair < 3 => {
                 m.squareness[pair] += urad * 1e-6;
-                effects.push(TrueEffect {
-                    iso_name_hint: ["EC0Y", "EA0Z", "EB0Z"][pair].into(),
-                    kind: EffectKind::Squareness,
-                    size: urad,
-                    unit: "urad",
-                    value: m.squareness[pair].abs(),
-                    signed: false,
-                    period: None,
-                    detail: String::new(),
-                    record_change: None,
-                });
+                effects.push(super::squareness_truth(pair, urad, m.squareness[pair]));
             }
             _ => return Err(unsupported(spec.kind, h)),
         }

@@ -20,7 +20,7 @@ use super::axis::stated_noise_um;
 use super::geom::{Iso, LinearErrors, REALISTIC, V3, rot_x, rot_y, rot_z, trans};
 use super::smooth::signed;
 use super::{
-    EffectKind, Hidden, Kind, LINEAR, Spec, TrueEffect, Truth, sawtooth, unsupported,
+    EffectKind, Hidden, Kind, LINEAR, SQUARENESS, Spec, TrueEffect, Truth, sawtooth, unsupported,
     write_manifest,
 };
 
@@ -226,8 +226,6 @@ fn draw_targets(
     }
 }
 
-const SQUARENESS: [&str; 3] = ["EC0Y", "EA0Z", "EB0Z"];
-
 pub(crate) fn write(spec: &Spec, rng: &mut ChaCha8Rng, dir: &Path) -> std::io::Result<Truth> {
     let strokes = [
         (0.0, rng.random_range(400.0..=1000.0_f64).round()),
@@ -291,17 +289,8 @@ pub(crate) fn write(spec: &Spec, rng: &mut ChaCha8Rng, dir: &Path) -> std::io::R
             }
             Hidden::Squareness { pair, urad } if pair < 3 => {
                 m.squareness[pair] += urad * 1e-6;
-                effects.push(TrueEffect {
-                    iso_name_hint: SQUARENESS[pair].into(),
-                    kind: EffectKind::Squareness,
-                    size: urad,
-                    unit: "urad",
-                    value: 0.0, // the total, set below
-                    signed: false,
-                    period: None,
-                    detail: String::new(),
-                    record_change: None,
-                });
+                // (The total, set below.)
+                effects.push(super::squareness_truth(pair, urad, 0.0));
             }
             Hidden::TrackerScale { ppm } => {
                 length_scale += ppm * 1e-6;
