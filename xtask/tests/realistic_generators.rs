@@ -9,7 +9,7 @@ use std::path::Path;
 use approx::assert_abs_diff_eq;
 use xtask::realistic::geom::V3;
 use xtask::realistic::rtest::BcMachine;
-use xtask::realistic::smooth::{Periodic, Smooth};
+use xtask::realistic::smooth::{Periodic, Smooth, Waviness};
 use xtask::realistic::tracker::TrackerMachine;
 use xtask::realistic::{BaseModel, Hidden, Kind, Spec, write, write_spec};
 
@@ -384,15 +384,20 @@ fn base_model_default_is_the_standard_user_model() {
 fn smooth_functions_have_their_size_and_rotary_ones_close_over_a_turn() {
     use rand::SeedableRng;
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(9);
-    for _ in 0..20 {
-        let f = Smooth::draw(&mut rng, -300.0, 500.0, 0.007);
+    for k in 0..40 {
+        let waviness = if k % 2 == 0 {
+            Waviness::Gentle
+        } else {
+            Waviness::Wavy
+        };
+        let f = Smooth::draw(&mut rng, -300.0, 500.0, 0.007, waviness);
         let v: Vec<f64> = (0..=800).map(|i| f.at(-300.0 + i as f64)).collect();
         let pv =
             v.iter().copied().fold(f64::MIN, f64::max) - v.iter().copied().fold(f64::MAX, f64::min);
         // Sampled every 1 mm here, every 4 mm when scaled: the peak-to-valley agrees to 1 %.
         assert_abs_diff_eq!(pv, 0.007, epsilon = 7e-5);
         assert_abs_diff_eq!(f.at(-300.0), 0.0, epsilon = 1e-15);
-        let g = Periodic::draw(&mut rng, 5e-6);
+        let g = Periodic::draw(&mut rng, 5e-6, waviness);
         for t in [0.0, 1.0, 2.5, 4.0] {
             assert_abs_diff_eq!(g.at(t), g.at(t + std::f64::consts::TAU), epsilon = 1e-15);
         }

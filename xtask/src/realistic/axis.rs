@@ -46,7 +46,7 @@ pub(crate) fn write(spec: &Spec, rng: &mut ChaCha8Rng, dir: &Path) -> std::io::R
     let sigma = rng.random_range(0.1..=0.6) * spec.noise_scale;
     let s = spec.ordinary_scale;
     let pos_size = rng.random_range(3.0..=20.0) * s;
-    let positioning = Smooth::draw(rng, 0.0, stroke, pos_size);
+    let positioning = Smooth::draw(rng, 0.0, stroke, pos_size, spec.waviness);
     let zero_um = signed(rng, 0.0, 5.0) * s;
     let ordinary_reversal_um = if spec.ordinary_reversal {
         signed(rng, 0.5, 3.0) * s

@@ -4,7 +4,7 @@
 use mte_linalg::nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
 use rand::Rng;
 
-use super::smooth::{Smooth, signed};
+use super::smooth::{Smooth, Waviness, signed};
 
 /// A rigid transform.
 pub type Iso = Isometry3<f64>;
@@ -77,14 +77,14 @@ impl LinearErrors {
     }
 
     /// Random smooth errors of the axis along machine direction `dir` (0..3) over `[lo, hi]`,
-    /// every size multiplied by `scale`.
+    /// every size multiplied by `scale`, of the given waviness.
     pub fn draw(
         rng: &mut impl Rng,
         dir: usize,
-        lo: f64,
-        hi: f64,
+        (lo, hi): (f64, f64),
         sizes: ComponentSizes,
         scale: f64,
+        waviness: Waviness,
     ) -> Self {
         let mut d = [Smooth::zero(), Smooth::zero(), Smooth::zero()];
         for (k, slot) in d.iter_mut().enumerate() {
@@ -94,12 +94,12 @@ impl LinearErrors {
                 sizes.straightness_um
             };
             let size = signed(rng, a, b).abs() * 1e-3 * scale;
-            *slot = Smooth::draw(rng, lo, hi, size);
+            *slot = Smooth::draw(rng, lo, hi, size, waviness);
         }
         let mut e = [Smooth::zero(), Smooth::zero(), Smooth::zero()];
         for slot in &mut e {
             let size = signed(rng, sizes.angular_urad.0, sizes.angular_urad.1).abs() * 1e-6 * scale;
-            *slot = Smooth::draw(rng, lo, hi, size);
+            *slot = Smooth::draw(rng, lo, hi, size, waviness);
         }
         Self { d, e }
     }

@@ -283,6 +283,8 @@ pub struct Spec {
     pub base_model: BaseModel,
     /// Multiplies every ordinary error (1 = realistic, 0 = a perfect machine).
     pub ordinary_scale: f64,
+    /// How wavy the ordinary errors are ([`smooth::Waviness`]).
+    pub waviness: smooth::Waviness,
     /// Multiplies the noise σ (1 = realistic, 0 = noise-free readings).
     pub noise_scale: f64,
     /// R-test: number of measurement cycles (re-centred each cycle); `None` draws 1–3.
@@ -304,6 +306,7 @@ impl Spec {
             ordinary_reversal: false,
             base_model: BaseModel::Default,
             ordinary_scale: 1.0,
+            waviness: smooth::Waviness::Gentle,
             noise_scale: 1.0,
             cycles: None,
             log: None,
@@ -418,7 +421,7 @@ pub(crate) fn two_axis(
 ) -> (TwoAxis, TrueEffect) {
     let effect = TwoAxis {
         peak_mm: um * 1e-3,
-        shape: smooth::Smooth::draw(rng, x_stroke.0, x_stroke.1, 1.0),
+        shape: smooth::Smooth::draw(rng, x_stroke.0, x_stroke.1, 1.0, smooth::Waviness::Gentle),
     };
     let truth = TrueEffect {
         iso_name_hint: "EYY".into(),

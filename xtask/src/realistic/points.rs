@@ -204,7 +204,7 @@ pub(crate) fn write(
     let s = spec.ordinary_scale;
     let strokes = [(-300.0, 300.0), (-300.0, 300.0), (-300.0, 100.0)];
     let [ex, ey, ez] =
-        [0, 1, 2].map(|k| LinearErrors::draw(rng, k, strokes[k].0, strokes[k].1, REALISTIC, s));
+        [0, 1, 2].map(|k| LinearErrors::draw(rng, k, strokes[k], REALISTIC, s, spec.waviness));
     let mut squareness = [0; 3].map(|_| signed(rng, 5.0, 60.0) * 1e-6 * s);
     let (dx, dy) = (
         signed(rng, 10.0, 40.0) * 1e-3 * s,
@@ -216,11 +216,11 @@ pub(crate) fn write(
     );
     let motion_d = [0; 3].map(|_| {
         let size = rng.random_range(1.0..5.0) * 1e-3 * s;
-        Periodic::draw(rng, size)
+        Periodic::draw(rng, size, spec.waviness)
     });
     let motion_e = [0; 3].map(|_| {
         let size = rng.random_range(2.0..20.0) * 1e-6 * s;
-        Periodic::draw(rng, size)
+        Periodic::draw(rng, size, spec.waviness)
     });
     let noise_um = rng.random_range(0.5..2.0) * spec.noise_scale;
     let target_mm = V3::new(

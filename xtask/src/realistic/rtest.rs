@@ -24,7 +24,7 @@ use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, Normal};
 
 use super::geom::{ComponentSizes, Iso, LinearErrors, V3, rot_x, rot_y, rot_z, trans};
-use super::smooth::{Periodic, signed};
+use super::smooth::{Periodic, Waviness, signed};
 use super::{EffectKind, Hidden, Kind, Spec, TrueEffect, Truth, unsupported, write_manifest};
 
 /// A function of time for a location error, mm.
@@ -79,13 +79,13 @@ impl RotaryErrors {
         }
     }
 
-    fn draw(rng: &mut impl Rng, scale: f64) -> Self {
+    fn draw(rng: &mut impl Rng, scale: f64, waviness: Waviness) -> Self {
         let mut r = Self::zero();
         for k in 0..3 {
             let size = rng.random_range(1.0..=5.0) * 1e-3 * scale;
-            r.d[k] = Periodic::draw(rng, size);
+            r.d[k] = Periodic::draw(rng, size, waviness);
             let size = rng.random_range(2.0..=20.0) * 1e-6 * scale;
-            r.e[k] = Periodic::draw(rng, size);
+            r.e[k] = Periodic::draw(rng, size, waviness);
         }
         r
     }
@@ -360,10 +360,13 @@ pub(crate) fn write(spec: &Spec, rng: &mut ChaCha8Rng, dir: &Path) -> std::io::R
         ea0c: ori(rng),
         eb0c: ori(rng),
     };
-    m.rotary = [RotaryErrors::draw(rng, s), RotaryErrors::draw(rng, s)];
+    m.rotary = [
+        RotaryErrors::draw(rng, s, spec.waviness),
+        RotaryErrors::draw(rng, s, spec.waviness),
+    ];
     for k in 0..3 {
         let (lo, hi) = m.strokes[k];
-        m.linear[k] = LinearErrors::draw(rng, k, lo, hi, SMALL, s);
+        m.linear[k] = LinearErrors::draw(rng, k, (lo, hi), SMALL, s, spec.waviness);
     }
     for k in 0..3 {
         m.squareness[k] = signed(rng, 5.0, 60.0) * 1e-6 * s;

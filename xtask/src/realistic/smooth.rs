@@ -6,9 +6,23 @@
 //! It is deliberately neither a Legendre polynomial nor a single sine: a base model of degree 3
 //! fits it closely but not exactly, as on a real machine. An error motion of a rotary axis is a
 //! random sum of the first three harmonics of a turn (periodic over one turn by construction).
+//! [`Waviness::Wavy`] draws them with more and shorter waves and harmonics (robustness rows).
 
 use rand::Rng;
 use std::f64::consts::TAU;
+
+/// How wavy the ordinary errors are drawn ([`Smooth::draw`], [`Periodic::draw`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Waviness {
+    /// Two or three waves of ½–2 strokes on the cubic; rotary error motions up to the 3rd
+    /// harmonic of a turn.
+    #[default]
+    Gentle,
+    /// Two to five waves of ⅕–2 strokes; rotary error motions up to the 5th harmonic: smooth
+    /// errors with more shape than a cubic and a few waves hold, for the studies' robustness
+    /// rows (the base model's completions must absorb them).
+    Wavy,
+}
 
 /// A smooth function of a linear axis coordinate over `[lo, hi]` (mm), value in the unit of its
 /// size (the caller decides: mm or rad).
@@ -38,7 +52,7 @@ impl Smooth {
     /// A random smooth function over `[lo, hi]` whose peak-to-valley over the stroke is `size`
     /// (sign and shape random). Zero at the stroke's lower end, as an interferometer run that is
     /// zeroed at its first target.
-    pub fn draw(rng: &mut impl Rng, lo: f64, hi: f64, size: f64) -> Self {
+    pub fn draw(rng: &mut impl Rng, lo: f64, hi: f64, size: f64, waviness: Waviness) -> Self {
         let stroke = hi - lo;
         let poly = [
             0.0,
@@ -46,12 +60,16 @@ impl Smooth {
             rng.random_range(-1.0..1.0),
             rng.random_range(-1.0..1.0),
         ];
-        let n_waves = rng.random_range(2..=3);
+        let (most_waves, shortest) = match waviness {
+            Waviness::Gentle => (3, 0.5),
+            Waviness::Wavy => (5, 0.2),
+        };
+        let n_waves = rng.random_range(2..=most_waves);
         let waves = (0..n_waves)
             .map(|_| {
                 (
                     rng.random_range(0.2..0.8),
-                    rng.random_range(0.5..2.0) * stroke,
+                    rng.random_range(shortest..2.0) * stroke,
                     rng.random_range(0.0..TAU),
                 )
             })
@@ -110,8 +128,12 @@ impl Periodic {
     }
 
     /// A random periodic function with largest absolute value `size`.
-    pub fn draw(rng: &mut impl Rng, size: f64) -> Self {
-        let mut harmonics: Vec<(f64, f64, f64)> = (1..=3)
+    pub fn draw(rng: &mut impl Rng, size: f64, waviness: Waviness) -> Self {
+        let highest = match waviness {
+            Waviness::Gentle => 3,
+            Waviness::Wavy => 5,
+        };
+        let mut harmonics: Vec<(f64, f64, f64)> = (1..=highest)
             .map(|k| {
                 (
                     rng.random_range(0.2..1.0) / k as f64,

@@ -240,7 +240,7 @@ pub(crate) fn write(spec: &Spec, rng: &mut ChaCha8Rng, dir: &Path) -> std::io::R
     );
     let s = spec.ordinary_scale;
     for (k, (lo, hi)) in strokes.iter().enumerate() {
-        m.components[k] = LinearErrors::draw(rng, k, *lo, *hi, REALISTIC, s);
+        m.components[k] = LinearErrors::draw(rng, k, (*lo, *hi), REALISTIC, s, spec.waviness);
     }
     for k in 0..3 {
         m.squareness[k] = signed(rng, 5.0, 60.0) * 1e-6 * s;
