@@ -254,10 +254,25 @@ fn run_study(args: &[String]) -> Result<(), String> {
         ..Default::default()
     };
     if which == "fdr" || which == "all" {
+        use xtask::realistic::smooth::Waviness;
         for &kind in &kinds {
-            report
-                .fdr
-                .push(studies::fdr_with(kind, n, seed, &base_model));
+            report.fdr.push(studies::fdr_with(
+                kind,
+                n,
+                seed,
+                &base_model,
+                Waviness::Gentle,
+            ));
+        }
+        // Robustness: wavier ordinary errors, half as many datasets.
+        for &kind in &kinds {
+            report.fdr.push(studies::fdr_with(
+                kind,
+                n.div_ceil(2),
+                seed,
+                &base_model,
+                Waviness::Wavy,
+            ));
         }
     }
     if which == "power" || which == "all" {

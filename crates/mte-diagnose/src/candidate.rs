@@ -92,6 +92,13 @@ pub enum Role {
     /// completes the base (before the search, or once a cause that hid it is in) and is no
     /// cause.
     Completion,
+    /// All the orders of a component error beyond the base's at once, up to the highest it is
+    /// completed to ([`Completion`] with `span`): it completes the base as a [`Role::Completion`]
+    /// does — its columns the model does not have yet — where the remainder of a smooth error
+    /// (a waviness of a few cycles over the stroke) spreads over more orders than one block and
+    /// no block alone is significant. It is not *the next order* a cause's separation from the
+    /// base is judged against.
+    CompletionSpan,
     /// A shape of the residuals that no cause has (the library's: a component error changing
     /// with two linear axes at once): one more structure test, never fitted; when significant
     /// the report shows it as structure nothing in the library explains.
@@ -658,9 +665,11 @@ impl BaseModelSpec {
 impl BaseModelSpec {
     /// The completions of the spec's component errors, each block after the one before: for
     /// every component error of a linear axis in the base, its next polynomial degrees (up to
-    /// [`MAX_COMPONENT_DEGREE`], [`COMPLETION_BLOCK`] at a time); for every rotary axis, the
-    /// next harmonic of a turn (up to [`MAX_COMPONENT_HARMONIC`]) of all its error motions at
-    /// once. Real component errors are smooth functions, not polynomials of the degree a user
+    /// [`MAX_COMPONENT_DEGREE`], [`COMPLETION_BLOCK`] at a time), and all its degrees beyond the
+    /// base's at once (up to [`MAX_DENSE_COMPONENT_DEGREE`] on a densely sampled axis, a
+    /// [`Role::CompletionSpan`]), tested where no block is significant; for every rotary axis,
+    /// the next harmonic of a turn (up to [`MAX_COMPONENT_HARMONIC`]) of all its error motions
+    /// at once. Real component errors are smooth functions, not polynomials of the degree a user
     /// happens to state; the diagnosis adds these when the data ask for them, before it looks
     /// for causes. A rotary axis' error motions are completed together because a harmonic of a
     /// turn (the form of a bearing race, a wobble) shows in all of them, each by a little, and
@@ -698,6 +707,22 @@ impl BaseModelSpec {
             .into_par_iter()
             .map(|(slot, hi)| {
                 let mut out: Vec<Box<dyn Candidate>> = Vec::new();
+                // All the orders beyond the base's at once, up to a higher degree where the axis
+                // has the positions for it ([`Role::CompletionSpan`]): a waviness of a few
+                // cycles over the stroke spreads over more orders than a block holds, each block
+                // too little of it to be significant alone.
+                let top = highest_completion_degree(obs, slot);
+                if hi + COMPLETION_BLOCK < top
+                    && let Some(cols) = component_columns(obs, slot, hi + 1, top)
+                {
+                    let name = format!("{} P{}-{top}", slot.name, hi + 1);
+                    let what = format!("degrees {} to {top} together", hi + 1);
+                    out.push(Box::new(Completion {
+                        term: component_term(slot, name, &what, cols),
+                        after: None,
+                        span: true,
+                    }));
+                }
                 // Orders in blocks: a smooth error's remainder spreads over several orders, which
                 // one at a time would not reveal.
                 let mut after: Option<String> = None;
@@ -718,6 +743,7 @@ impl BaseModelSpec {
                     out.push(Box::new(Completion {
                         term,
                         after: after.replace(name),
+                        span: false,
                     }));
                 }
                 out
@@ -772,6 +798,7 @@ impl BaseModelSpec {
                     out.push(Box::new(Completion {
                         term,
                         after: after.replace(name),
+                        span: false,
                     }));
                 }
                 out
@@ -882,6 +909,30 @@ pub(crate) fn interaction_probes(
 /// Highest polynomial degree the base's component errors of a linear axis are completed to.
 pub const MAX_COMPONENT_DEGREE: usize = 10;
 
+/// Highest polynomial degree the component errors of a densely sampled linear axis are
+/// completed to: one degree per four distinct positions beyond [`MAX_COMPONENT_DEGREE`], up to
+/// this.
+pub const MAX_DENSE_COMPONENT_DEGREE: usize = 15;
+
+/// Distinct positions along a linear axis per polynomial degree its component errors may be
+/// completed to beyond [`MAX_COMPONENT_DEGREE`].
+const POSITIONS_PER_DEGREE: usize = 4;
+
+/// The highest polynomial degree a component error of a linear axis is completed to:
+/// [`MAX_COMPONENT_DEGREE`], or on an axis with many distinct positions (tracker targets,
+/// points, R-test paths) one degree per [`POSITIONS_PER_DEGREE`] of them, up to
+/// [`MAX_DENSE_COMPONENT_DEGREE`] — a smooth error with a few waves over the stroke needs
+/// about π degrees per wave, still far fewer than a ball screw's pitch error has waves.
+fn highest_completion_degree(obs: &Observations, slot: &SlotEffect) -> usize {
+    let positions = match &slot.role {
+        SlotRole::Component { axis, .. } => obs
+            .variable(axis)
+            .map_or(0, |v| crate::basis::distinct_sorted(&v.values).len()),
+        SlotRole::Constant { .. } => 0,
+    };
+    (positions / POSITIONS_PER_DEGREE).clamp(MAX_COMPONENT_DEGREE, MAX_DENSE_COMPONENT_DEGREE)
+}
+
 /// Polynomial degrees a completion adds at once.
 pub const COMPLETION_BLOCK: usize = 3;
 
@@ -967,6 +1018,8 @@ pub struct Completion {
     pub term: Term,
     /// The completion it follows (the previous order), if any.
     pub after: Option<String>,
+    /// Every order beyond the base's at once ([`Role::CompletionSpan`]), not the next block.
+    pub span: bool,
 }
 
 impl Candidate for Completion {
@@ -979,13 +1032,18 @@ impl Candidate for Completion {
     }
 
     fn role(&self) -> Role {
-        Role::Completion
+        if self.span {
+            Role::CompletionSpan
+        } else {
+            Role::Completion
+        }
     }
 
     fn on_rows(&self, _obs: &Observations, rows: &[usize]) -> Box<dyn Candidate> {
         Box::new(Completion {
             term: self.term.select_rows(rows),
             after: self.after.clone(),
+            span: self.span,
         })
     }
 }

@@ -1470,6 +1470,50 @@ impl Pool {
         Some(rows)
     }
 
+    /// The products of the pool entries `entries` (their first variants) with the basis of
+    /// `base_fit`, the fit of the pool's base under the pool's weights but those of the outer
+    /// fold `held_out`'s rows (zero), from the pool's products
+    /// ([`Projector::basis_products_of`]): the start of a search's [`CompletionRows`], so that
+    /// its first [`Searcher::next_completion`] makes no pass over the observations for the
+    /// base's directions.
+    fn base_rows(
+        &self,
+        entries: &[usize],
+        base_fit: &Projector,
+        held_out: Option<usize>,
+    ) -> CompletionRows {
+        let product_rows = |ci: usize| {
+            let (at, k) = (self.offsets[ci][0], self.variants[ci][0].width());
+            let mut xtc = self.products.x.columns(at, k).into_owned();
+            if let Some(f) = held_out {
+                xtc -= self.fold_shares[f].x.columns(at, k);
+            }
+            xtc
+        };
+        let stable = base_fit.rank();
+        CompletionRows {
+            stable,
+            held_out,
+            rows: entries
+                .iter()
+                .map(|&ci| (ci, base_fit.basis_products_of(0..stable, &product_rows(ci))))
+                .collect(),
+        }
+    }
+
+    /// `(CᵀW²C, CᵀW²y)` of pool entry `ci`'s first variant `C` under the pool's weights but
+    /// those of the outer fold `held_out`'s rows (zero).
+    fn own_products(&self, ci: usize, held_out: Option<usize>) -> (DMat, DVec) {
+        let (at, k) = (self.offsets[ci][0], self.variants[ci][0].width());
+        let mut gram = self.products.gram[ci][0].clone();
+        let mut cy = self.products.y.rows(at, k).into_owned();
+        if let Some(f) = held_out {
+            gram -= &self.fold_shares[f].gram[ci][0];
+            cy -= self.fold_shares[f].y.rows(at, k);
+        }
+        (gram, cy)
+    }
+
     /// The products of pool entry `ci`'s first variant with every variant ([`EntryProducts`]),
     /// formed on first use. Formed outside the lock (a search that meets an entry another is
     /// forming forms it too: the same numbers, kept once), so no search waits on another.
@@ -1510,10 +1554,11 @@ impl Products {
 /// ([`Searcher::next_completion`], [`Projector::increments_knowing`]), by pool entry: of each,
 /// the rows of the first `stable` directions stay valid while the model grows (the basis of
 /// the base and its completions, which every later fit extends); those beyond are formed again.
-#[derive(Default)]
 struct CompletionRows {
     stable: usize,
     rows: HashMap<usize, DMat>,
+    /// The outer fold whose rows the search leaves out, if any (for the pool's products).
+    held_out: Option<usize>,
 }
 
 /// A term the search added, with where it came from.
@@ -1586,8 +1631,16 @@ impl Searcher<'_> {
         base_fit: Projector,
     ) -> (SearchResult, Projector) {
         let mut completed: Vec<Term> = Vec::new();
+        let completions: Vec<usize> = (0..self.pool.variants.len())
+            .filter(|&ci| {
+                matches!(
+                    self.candidate(ci).role(),
+                    Role::Completion | Role::CompletionSpan
+                )
+            })
+            .collect();
+        let mut rows = self.pool.base_rows(&completions, &base_fit, held_out);
         let mut fit = base_fit;
-        let mut rows = CompletionRows::default();
         while let Some(t) = self.next_completion(&completed, &fit, &mut rows, fit.rank()) {
             fit = fit.extended(&t.columns);
             completed.push(t);
@@ -1621,7 +1674,7 @@ impl Searcher<'_> {
     ) -> Option<Term> {
         let (rss, dof) = (fit.rss_w(), fit.dof());
         let terms: Vec<&Term> = self.base.iter().chain(model).collect();
-        let entries = self.next_order_entries(&terms);
+        let entries = self.next_order_entries(&terms, true);
         let mut known: Vec<DMat> = entries
             .iter()
             .map(|ci| match rows.rows.remove(ci) {
@@ -1633,7 +1686,12 @@ impl Searcher<'_> {
             .iter()
             .map(|&ci| &self.pool.variants[ci][0].columns)
             .collect();
-        let increments = fit.increments_knowing(&columns, &mut known);
+        let own = entries
+            .iter()
+            .map(|&ci| self.pool.own_products(ci, rows.held_out))
+            .collect();
+        let increments =
+            fit.increments_knowing(&columns, &mut known, own, &fit.basis_of(&self.obs.values));
         rows.rows.extend(entries.iter().copied().zip(known));
         rows.stable = stable;
         // A block of orders may hold some the model already has (confounded components of a
@@ -1649,10 +1707,17 @@ impl Searcher<'_> {
         // of an axis and its angular error times a constant offset, on tracker lengths) have
         // the same p-value but for rounding: they rank by their place in the library, so that
         // rounding (another CPU, another summation order) does not decide between them.
-        tested.sort_by(|a, b| rounding_free(a.1).total_cmp(&rounding_free(b.1)));
+        // The next blocks first: a span of every order at once only where no block alone is
+        // significant (it would otherwise often win with orders the data do not ask for).
+        let is_span = |ci: usize| self.candidate(ci).role() == Role::CompletionSpan;
+        tested.sort_by(|a, b| {
+            is_span(a.0)
+                .cmp(&is_span(b.0))
+                .then(rounding_free(a.1).total_cmp(&rounding_free(b.1)))
+        });
         tested
             .into_iter()
-            .take_while(|&(_, p)| p * (eligible as f64) < COMPLETION_LEVEL)
+            .filter(|&(_, p)| p * (eligible as f64) < COMPLETION_LEVEL)
             .find_map(|(ci, _)| {
                 let t = &self.pool.variants[ci][0];
                 let keep = fit.separable_columns(&t.columns);
@@ -1661,12 +1726,17 @@ impl Searcher<'_> {
     }
 
     /// The pool entries that are a next order of an error of the model `terms` and not in it
-    /// ([`is_next_order`]).
-    fn next_order_entries(&self, terms: &[&Term]) -> Vec<usize> {
+    /// ([`is_next_order`]); with `spans`, the spans of every order beyond the base's too
+    /// ([`Role::CompletionSpan`]: completions, but not the next order).
+    fn next_order_entries(&self, terms: &[&Term], spans: bool) -> Vec<usize> {
         let in_model = |name: &str| terms.iter().any(|t| t.name == name);
         (0..self.pool.variants.len())
             .filter(|&ci| {
-                is_next_order(self.candidate(ci), in_model)
+                let c = self.candidate(ci);
+                (is_next_order(c, in_model)
+                    || spans
+                        && c.role() == Role::CompletionSpan
+                        && c.requires().is_none_or(in_model))
                     && self.pool.variants[ci]
                         .first()
                         .is_some_and(|t| !in_model(&t.name))
@@ -1677,7 +1747,7 @@ impl Searcher<'_> {
     /// The next orders of the errors of the model `terms`, from the pool
     /// ([`Searcher::next_order_entries`]).
     fn next_orders(&self, terms: &[Term]) -> Vec<Term> {
-        self.next_order_entries(&terms.iter().collect::<Vec<_>>())
+        self.next_order_entries(&terms.iter().collect::<Vec<_>>(), false)
             .into_iter()
             .map(|ci| self.pool.variants[ci][0].clone())
             .collect()
@@ -3900,7 +3970,9 @@ fn full_completion(
     obs: &Observations,
     name: &str,
 ) -> Option<Term> {
-    library_variant(candidates, obs, name, |c| c.role() == Role::Completion)
+    library_variant(candidates, obs, name, |c| {
+        matches!(c.role(), Role::Completion | Role::CompletionSpan)
+    })
 }
 
 /// The column of the library's constant term `name` (a candidate of one single-column variant

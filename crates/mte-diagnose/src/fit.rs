@@ -966,43 +966,47 @@ impl Projector {
         out
     }
 
-    /// [`Projector::increments`] of the candidates `c` whose products with the first
+    /// [`Projector::increment_from_products`] of the candidates `c` whose products with the first
     /// directions of this projector's basis are known: `known[i]` holds `Qᵀ W cᵢ` on the first
     /// `known[i].nrows()` of them (from a projector this one extends: [`Projector::extended`]
     /// keeps the old basis as its first directions). Only the products with the directions
     /// beyond are formed — a model completed one term at a time reads the directions each
     /// term adds, not its whole basis again — and `known` becomes the products with all.
-    pub fn increments_knowing(&self, c: &[&DMat], known: &mut [DMat]) -> Vec<Increment> {
+    /// `own[i]`: `(cᵢᵀ W² cᵢ, cᵢᵀ W² y)`, and `qty = Qᵀ W y` ([`Projector::basis_of`]) of the
+    /// observations `y` the residuals are of: a candidate that knows every direction costs
+    /// no pass over the observations.
+    pub fn increments_knowing(
+        &self,
+        c: &[&DMat],
+        known: &mut [DMat],
+        own: Vec<(DMat, DVec)>,
+        qty: &DVec,
+    ) -> Vec<Increment> {
         let r = self.q.ncols();
-        let whitened: Vec<DMat> = c
-            .iter()
-            .map(|c| {
-                let mut cw = (*c).clone();
-                for mut column in cw.column_iter_mut() {
-                    column.component_mul_assign(&self.w);
-                }
-                cw
-            })
-            .collect();
         // Candidates that know as many directions: one product with the directions beyond.
         let from: Vec<usize> = known.iter().map(|k| k.nrows().min(r)).collect();
-        let mut order: Vec<usize> = (0..c.len()).collect();
+        let mut order: Vec<usize> = (0..c.len()).filter(|&i| from[i] < r).collect();
         order.sort_by_key(|&i| from[i]);
         for group in order.chunk_by(|&a, &b| from[a] == from[b]) {
             let r0 = from[group[0]];
-            let width: usize = group.iter().map(|&i| whitened[i].ncols()).sum();
-            let mut data = Vec::with_capacity(self.w.len() * width);
+            let width: usize = group.iter().map(|&i| c[i].ncols()).sum();
+            let mut cw = DMat::zeros(self.w.len(), width);
+            let mut at = 0;
             for &i in group {
-                data.extend_from_slice(whitened[i].as_slice());
+                let mut block = cw.columns_mut(at, c[i].ncols());
+                block.copy_from(c[i]);
+                for mut column in block.column_iter_mut() {
+                    column.component_mul_assign(&self.w);
+                }
+                at += c[i].ncols();
             }
-            let cw = DMat::from_vec(self.w.len(), width, data);
             let beyond = product(
                 as_faer(&self.q).subcols(r0, r - r0).transpose(),
                 as_faer(&cw),
             );
             let mut at = 0;
             for &i in group {
-                let k = whitened[i].ncols();
+                let k = c[i].ncols();
                 let mut a = DMat::zeros(r, k);
                 if r0 > 0 {
                     a.rows_mut(0, r0).copy_from(&known[i].rows(0, r0));
@@ -1012,15 +1016,9 @@ impl Projector {
                 at += k;
             }
         }
-        whitened
-            .iter()
+        own.into_iter()
             .zip(known.iter())
-            .map(|(cw, a)| {
-                self.increment_of(
-                    cw.columns(0, cw.ncols()),
-                    (r > 0).then(|| a.columns(0, a.ncols())),
-                )
-            })
+            .map(|((g, cy), a)| self.increment_from_products(&g, cy, a.rows(0, r), qty))
             .collect()
     }
 
@@ -1666,11 +1664,20 @@ mod tests {
             .map(|&p| crate::basis::sin_cos_columns(&v, p))
             .collect();
         let refs: Vec<&DMat> = c.iter().collect();
+        // Their own products, `CᵀW²C` and `CᵀW²y`.
+        let own = || -> Vec<(DMat, DVec)> {
+            c.iter()
+                .map(|c| {
+                    let cw2 = DMat::from_fn(n, c.ncols(), |i, j| c[(i, j)] * w[i] * w[i]);
+                    (c.tr_mul(&cw2), cw2.tr_mul(&y))
+                })
+                .collect()
+        };
         // Nothing known, then the narrow basis' products known (one candidate's not).
         let mut known = vec![DMat::zeros(0, 0); c.len()];
-        let first = narrow.increments_knowing(&refs, &mut known);
+        let first = narrow.increments_knowing(&refs, &mut known, own(), &narrow.basis_of(&y));
         known[1] = DMat::zeros(0, 0);
-        let second = wide.increments_knowing(&refs, &mut known);
+        let second = wide.increments_knowing(&refs, &mut known, own(), &wide.basis_of(&y));
         for (knowing, fit) in [(&first, &narrow), (&second, &wide)] {
             let direct = fit.increments(c.len(), |k| Cow::Borrowed(&c[k]));
             for (d, k) in direct.iter().zip(knowing) {
