@@ -255,24 +255,13 @@ fn run_study(args: &[String]) -> Result<(), String> {
     };
     if which == "fdr" || which == "all" {
         use xtask::realistic::smooth::Waviness;
-        for &kind in &kinds {
-            report.fdr.push(studies::fdr_with(
-                kind,
-                n,
-                seed,
-                &base_model,
-                Waviness::Gentle,
-            ));
-        }
-        // Robustness: wavier ordinary errors, half as many datasets.
-        for &kind in &kinds {
-            report.fdr.push(studies::fdr_with(
-                kind,
-                n.div_ceil(2),
-                seed,
-                &base_model,
-                Waviness::Wavy,
-            ));
+        // Then, for robustness, wavier ordinary errors on half as many datasets.
+        for (waviness, count) in [(Waviness::Gentle, n), (Waviness::Wavy, n.div_ceil(2))] {
+            for &kind in &kinds {
+                report
+                    .fdr
+                    .push(studies::fdr_with(kind, count, seed, &base_model, waviness));
+            }
         }
     }
     if which == "power" || which == "all" {

@@ -105,6 +105,14 @@ pub enum Role {
     Probe,
 }
 
+impl Role {
+    /// Whether a candidate of this role completes the base ([`Role::Completion`],
+    /// [`Role::CompletionSpan`]) rather than being a cause or a probe.
+    pub fn completes(self) -> bool {
+        matches!(self, Role::Completion | Role::CompletionSpan)
+    }
+}
+
 /// A candidate's variants on a subset of the observations ([`Candidate::on_rows`]).
 struct Restricted {
     variants: Vec<Term>,

@@ -1470,48 +1470,39 @@ impl Pool {
         Some(rows)
     }
 
-    /// The products of the pool entries `entries` (their first variants) with the basis of
-    /// `base_fit`, the fit of the pool's base under the pool's weights but those of the outer
-    /// fold `held_out`'s rows (zero), from the pool's products
-    /// ([`Projector::basis_products_of`]): the start of a search's [`CompletionRows`], so that
-    /// its first [`Searcher::next_completion`] makes no pass over the observations for the
-    /// base's directions.
+    /// The products of the pool entries `entries` (their first variants `C`) for a search
+    /// whose base fit is `base_fit` — the pool's base under the pool's weights but those of the
+    /// outer fold `held_out`'s rows (zero) — from the pool's products: `Qᵀ W C` on the base's
+    /// directions ([`Projector::basis_products_of`]) and `(CᵀW²C, CᵀW²y)`. The start of the
+    /// search's [`CompletionRows`]: its [`Searcher::next_completion`] makes no pass over the
+    /// observations but for the directions beyond the base's.
     fn base_rows(
         &self,
         entries: &[usize],
         base_fit: &Projector,
         held_out: Option<usize>,
     ) -> CompletionRows {
-        let product_rows = |ci: usize| {
+        let stable = base_fit.rank();
+        let mut rows = CompletionRows {
+            stable,
+            ..Default::default()
+        };
+        for &ci in entries {
             let (at, k) = (self.offsets[ci][0], self.variants[ci][0].width());
             let mut xtc = self.products.x.columns(at, k).into_owned();
+            let mut gram = self.products.gram[ci][0].clone();
+            let mut cy = self.products.y.rows(at, k).into_owned();
             if let Some(f) = held_out {
-                xtc -= self.fold_shares[f].x.columns(at, k);
+                let share = &self.fold_shares[f];
+                xtc -= share.x.columns(at, k);
+                gram -= &share.gram[ci][0];
+                cy -= share.y.rows(at, k);
             }
-            xtc
-        };
-        let stable = base_fit.rank();
-        CompletionRows {
-            stable,
-            held_out,
-            rows: entries
-                .iter()
-                .map(|&ci| (ci, base_fit.basis_products_of(0..stable, &product_rows(ci))))
-                .collect(),
+            rows.rows
+                .insert(ci, base_fit.basis_products_of(0..stable, &xtc));
+            rows.own.insert(ci, (gram, cy));
         }
-    }
-
-    /// `(CᵀW²C, CᵀW²y)` of pool entry `ci`'s first variant `C` under the pool's weights but
-    /// those of the outer fold `held_out`'s rows (zero).
-    fn own_products(&self, ci: usize, held_out: Option<usize>) -> (DMat, DVec) {
-        let (at, k) = (self.offsets[ci][0], self.variants[ci][0].width());
-        let mut gram = self.products.gram[ci][0].clone();
-        let mut cy = self.products.y.rows(at, k).into_owned();
-        if let Some(f) = held_out {
-            gram -= &self.fold_shares[f].gram[ci][0];
-            cy -= self.fold_shares[f].y.rows(at, k);
-        }
-        (gram, cy)
+        rows
     }
 
     /// The products of pool entry `ci`'s first variant with every variant ([`EntryProducts`]),
@@ -1554,11 +1545,12 @@ impl Products {
 /// ([`Searcher::next_completion`], [`Projector::increments_knowing`]), by pool entry: of each,
 /// the rows of the first `stable` directions stay valid while the model grows (the basis of
 /// the base and its completions, which every later fit extends); those beyond are formed again.
+#[derive(Default)]
 struct CompletionRows {
     stable: usize,
     rows: HashMap<usize, DMat>,
-    /// The outer fold whose rows the search leaves out, if any (for the pool's products).
-    held_out: Option<usize>,
+    /// `(CᵀW²C, CᵀW²y)` of each entry under the search's weights ([`Pool::base_rows`]).
+    own: HashMap<usize, (DMat, DVec)>,
 }
 
 /// A term the search added, with where it came from.
@@ -1632,12 +1624,7 @@ impl Searcher<'_> {
     ) -> (SearchResult, Projector) {
         let mut completed: Vec<Term> = Vec::new();
         let completions: Vec<usize> = (0..self.pool.variants.len())
-            .filter(|&ci| {
-                matches!(
-                    self.candidate(ci).role(),
-                    Role::Completion | Role::CompletionSpan
-                )
-            })
+            .filter(|&ci| self.candidate(ci).role().completes())
             .collect();
         let mut rows = self.pool.base_rows(&completions, &base_fit, held_out);
         let mut fit = base_fit;
@@ -1686,10 +1673,7 @@ impl Searcher<'_> {
             .iter()
             .map(|&ci| &self.pool.variants[ci][0].columns)
             .collect();
-        let own = entries
-            .iter()
-            .map(|&ci| self.pool.own_products(ci, rows.held_out))
-            .collect();
+        let own = entries.iter().map(|ci| rows.own[ci].clone()).collect();
         let increments =
             fit.increments_knowing(&columns, &mut known, own, &fit.basis_of(&self.obs.values));
         rows.rows.extend(entries.iter().copied().zip(known));
@@ -1733,10 +1717,9 @@ impl Searcher<'_> {
         (0..self.pool.variants.len())
             .filter(|&ci| {
                 let c = self.candidate(ci);
-                (is_next_order(c, in_model)
-                    || spans
-                        && c.role() == Role::CompletionSpan
-                        && c.requires().is_none_or(in_model))
+                let role = c.role();
+                (role == Role::Completion || spans && role.completes())
+                    && c.requires().is_none_or(in_model)
                     && self.pool.variants[ci]
                         .first()
                         .is_some_and(|t| !in_model(&t.name))
@@ -3970,9 +3953,7 @@ fn full_completion(
     obs: &Observations,
     name: &str,
 ) -> Option<Term> {
-    library_variant(candidates, obs, name, |c| {
-        matches!(c.role(), Role::Completion | Role::CompletionSpan)
-    })
+    library_variant(candidates, obs, name, |c| c.role().completes())
 }
 
 /// The column of the library's constant term `name` (a candidate of one single-column variant

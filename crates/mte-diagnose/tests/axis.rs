@@ -153,11 +153,21 @@ fn hidden_reversal_is_found_and_sized() {
     );
 }
 
+/// Time of the last reading of these datasets (5 runs of 2 × 101 readings, 4 s apart).
+const LAST_T_S: f64 = 4.0 * (5 * 2 * 101 - 1) as f64;
+
+/// A finding's stated change of the zero offset over the measured time, µm: (value, u).
+fn change_over_the_measured_time_um(f: &mte_diagnose::Finding) -> Option<(f64, f64)> {
+    f.estimates
+        .iter()
+        .find(|e| e.name == "EXX offset change over the measured time")
+        .map(|e| (e.value * 1e3, e.uncertainty * 1e3))
+}
+
 /// A drift's size over the data: its change from the first reading (t = 0) to the last
 /// (t = 4 036 s), whether it is found linear or first-order.
 #[test]
 fn a_drift_states_its_change_over_the_measured_time() {
-    let last_t = 4.0 * (5 * 2 * 101 - 1) as f64;
     let settling = Hidden {
         zero_settling_um: 3.0,
         zero_settling_tau_s: 1500.0,
@@ -172,20 +182,16 @@ fn a_drift_states_its_change_over_the_measured_time() {
             "settling",
             settling,
             "EXX offset drift exp",
-            3.0 * (1.0 - (-last_t / 1500.0_f64).exp()),
+            3.0 * (1.0 - (-LAST_T_S / 1500.0_f64).exp()),
         ),
-        ("linear", linear, "EXX offset drift", 0.05 * last_t / 60.0),
+        ("linear", linear, "EXX offset drift", 0.05 * LAST_T_S / 60.0),
     ] {
         let d = run(&write_dataset(name, hidden, 21));
         let f = d
             .finding(found)
             .unwrap_or_else(|| panic!("{name}: {found} not found: {:?}", d.findings));
-        let change = f
-            .estimates
-            .iter()
-            .find(|e| e.name == "EXX offset change over the measured time")
+        let (v, u) = change_over_the_measured_time_um(f)
             .unwrap_or_else(|| panic!("{name}: no change over the measured time: {f:?}"));
-        let (v, u) = (change.value * 1e3, change.uncertainty * 1e3);
         assert!(
             u > 0.0 && u < 0.2 * truth_um.abs() && within(v, u, truth_um, 3.0),
             "{name}: change {v:.3} ± {u:.3} µm, truth {truth_um:.3} µm"
@@ -200,7 +206,6 @@ fn a_drift_states_its_change_over_the_measured_time() {
 /// the drift may be faster.
 #[test]
 fn a_drift_faster_than_the_revisits_is_sized_or_said_to_be_possibly_faster() {
-    let last_t = 4.0 * (5 * 2 * 101 - 1) as f64;
     let hidden = Hidden {
         zero_settling_um: 3.0,
         zero_settling_tau_s: 400.0,
@@ -210,13 +215,8 @@ fn a_drift_faster_than_the_revisits_is_sized_or_said_to_be_possibly_faster() {
     let f = d
         .finding("EXX offset drift exp")
         .unwrap_or_else(|| panic!("τ = 400 s: not found: {:?}", d.findings));
-    let change = f
-        .estimates
-        .iter()
-        .find(|e| e.name == "EXX offset change over the measured time")
-        .expect("a change over the measured time");
-    let truth_um = 3.0 * (1.0 - (-last_t / 400.0_f64).exp());
-    let (v, u) = (change.value * 1e3, change.uncertainty * 1e3);
+    let (v, u) = change_over_the_measured_time_um(f).expect("a change over the measured time");
+    let truth_um = 3.0 * (1.0 - (-LAST_T_S / 400.0_f64).exp());
     assert!(
         within(v, u, truth_um, 3.0),
         "change {v:.3} ± {u:.3} µm, truth {truth_um:.3} µm"
