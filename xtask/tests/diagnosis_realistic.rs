@@ -130,7 +130,7 @@ fn open_world_drift_that_rises_and_falls_is_reported_unexplained() {
 }
 
 #[test]
-fn an_error_of_two_axes_at_once_is_reported_as_unexplained_structure() {
+fn an_error_of_two_axes_at_once_is_never_explained_by_a_named_cause() {
     // A Y positioning error growing from mid-Y at a rate that changes along X: no rigid-body
     // error of the axes has that shape, so the answer is structure the library does not
     // explain (the structure test of a Y error changing with X and Y jointly), never a cause
