@@ -2,7 +2,7 @@
 //! pairs of a period, exponential approach in time, and the grids of periods and time
 //! constants the diagnosis scans.
 
-use mte_linalg::DMat;
+use mte_linalg::{DMat, DVec};
 
 /// Range of the values (min, max).
 pub(crate) fn range(values: &[f64]) -> (f64, f64) {
@@ -337,9 +337,179 @@ pub(crate) fn bounded_minimum(
     (x, fx)
 }
 
+/// Columns that are functions of one variable which each observation sees at a few poses, each
+/// with its own sensitivity (an R-test reading sees a positioning error at its pose and, with
+/// the opposite sign, at its setup's centring): `S B`, with `B` the functions at the variable's
+/// `m` distinct values and `S` an `n × m` matrix of a few entries per row. A scan over many
+/// periods of such functions ([`Candidate::spread`]) costs the distinct values, not the
+/// observations, in the diagnosis' products: runs and program cycles repeat their positions.
+#[derive(Debug, Clone)]
+pub struct Spread {
+    /// The distinct values, increasing.
+    values: Vec<f64>,
+    rows: usize,
+    /// Pose after pose (`poses × rows`): each row's value (index into `values`) and sensitivity.
+    group: Vec<usize>,
+    weight: Vec<f64>,
+}
+
+impl Spread {
+    /// The spread of `poses`: for each, the variable's value and the sensitivity of every
+    /// observation there.
+    ///
+    /// # Panics
+    /// If the slices are not all of one length.
+    pub fn new(poses: &[(&[f64], &[f64])]) -> Spread {
+        let rows = poses.first().map_or(0, |p| p.0.len());
+        assert!(
+            poses.iter().all(|p| p.0.len() == rows && p.1.len() == rows),
+            "one value and one sensitivity per observation at every pose"
+        );
+        let all: Vec<f64> = poses.iter().flat_map(|p| p.0.iter().copied()).collect();
+        let groups = Groups::new(&all);
+        Spread {
+            values: groups.values,
+            rows,
+            group: groups.of_row,
+            weight: poses.iter().flat_map(|p| p.1.iter().copied()).collect(),
+        }
+    }
+
+    /// The number of observations.
+    pub fn rows(&self) -> usize {
+        self.rows
+    }
+
+    /// The variable's distinct values, increasing: where a basis is evaluated.
+    pub fn values(&self) -> &[f64] {
+        &self.values
+    }
+
+    /// `S b`: the observations' columns of the functions whose values at
+    /// [`Spread::values`] are `b`'s columns.
+    pub fn expand(&self, b: &DMat) -> DMat {
+        assert_eq!(b.nrows(), self.values.len(), "one row per distinct value");
+        let n = self.rows;
+        let mut out = DMat::zeros(n, b.ncols());
+        for (j, bj) in b.column_iter().enumerate() {
+            let oj = out.column_mut(j);
+            let oj = oj.data.into_slice_mut();
+            for pose in 0..self.poses() {
+                let (group, weight) = (
+                    &self.group[pose * n..(pose + 1) * n],
+                    &self.weight[pose * n..(pose + 1) * n],
+                );
+                for (i, (&g, &w)) in group.iter().zip(weight).enumerate() {
+                    if pose == 0 {
+                        oj[i] = w * bj[g];
+                    } else {
+                        oj[i] += w * bj[g];
+                    }
+                }
+            }
+        }
+        out
+    }
+
+    /// The spread on the observations `rows` only (the same distinct values).
+    pub fn select_rows(&self, rows: &[usize]) -> Spread {
+        let n = self.rows;
+        let at: Vec<usize> = (0..self.poses())
+            .flat_map(|k| rows.iter().map(move |&i| k * n + i))
+            .collect();
+        Spread {
+            values: self.values.clone(),
+            rows: rows.len(),
+            group: at.iter().map(|&a| self.group[a]).collect(),
+            weight: at.iter().map(|&a| self.weight[a]).collect(),
+        }
+    }
+
+    /// How many poses each observation sees the variable at.
+    fn poses(&self) -> usize {
+        self.group.len().checked_div(self.rows).unwrap_or(0)
+    }
+
+    /// `Sᵀ diag(d) x` over the observations `rows` (none: all), `m ×` x's columns: the
+    /// products `Cᵀ diag(d) x` of the columns `C = S B` of any functions `B` of the variable
+    /// are `Bᵀ` times it.
+    pub(crate) fn weighted_sums(&self, x: &DMat, d: &DVec, rows: Option<&[usize]>) -> DMat {
+        let n = self.rows;
+        let mut z = DMat::zeros(self.values.len(), x.ncols());
+        // Each row's (value, weight) at every pose, once for all columns of x.
+        let mut entries: Vec<(usize, usize, f64)> = Vec::new();
+        let mut push = |i: usize| {
+            for k in 0..self.poses() {
+                let c = self.weight[k * n + i] * d[i];
+                if c != 0.0 {
+                    entries.push((i, self.group[k * n + i], c));
+                }
+            }
+        };
+        match rows {
+            Some(rows) => rows.iter().for_each(|&i| push(i)),
+            None => (0..n).for_each(&mut push),
+        }
+        for (xj, mut zj) in x.column_iter().zip(z.column_iter_mut()) {
+            for &(i, g, c) in &entries {
+                zj[g] += c * xj[i];
+            }
+        }
+        z
+    }
+
+    /// `Sᵀ diag(w2) S` (`m × m`, a few entries per observation) as its nonzero entries on and
+    /// above the diagonal: the Gram `Cᵀ diag(w2) C` of the columns of any functions `B` is
+    /// `Bᵀ` it `B` ([`Spread::quadratic`]).
+    pub(crate) fn gram(&self, w2: &DVec) -> Vec<(usize, usize, f64)> {
+        let n = self.rows;
+        let mut entries: Vec<(usize, usize, f64)> = Vec::new();
+        for i in 0..n {
+            for k in 0..self.poses() {
+                for l in k..self.poses() {
+                    let (a, b) = (self.group[k * n + i], self.group[l * n + i]);
+                    let c = self.weight[k * n + i] * self.weight[l * n + i] * w2[i];
+                    // Two poses at one value are one entry of twice the cross weight.
+                    let c = if k == l || a != b { c } else { 2.0 * c };
+                    entries.push((a.min(b), a.max(b), c));
+                }
+            }
+        }
+        entries.sort_by_key(|&(a, b, _)| (a, b));
+        let mut merged: Vec<(usize, usize, f64)> = Vec::new();
+        for (a, b, c) in entries {
+            match merged.last_mut() {
+                Some(last) if (last.0, last.1) == (a, b) => last.2 += c,
+                _ => merged.push((a, b, c)),
+            }
+        }
+        merged
+    }
+
+    /// `Bᵀ M B` of the functions `b` at the spread's values and the entries `m` of a symmetric
+    /// matrix on and above its diagonal ([`Spread::gram`]).
+    pub(crate) fn quadratic(m: &[(usize, usize, f64)], b: &DMat) -> DMat {
+        let k = b.ncols();
+        let mut out = DMat::zeros(k, k);
+        for &(g, h, c) in m {
+            for i in 0..k {
+                for j in 0..k {
+                    let v = if g == h {
+                        c * b[(g, i)] * b[(g, j)]
+                    } else {
+                        c * (b[(g, i)] * b[(h, j)] + b[(h, i)] * b[(g, j)])
+                    };
+                    out[(i, j)] += v;
+                }
+            }
+        }
+        out
+    }
+}
+
 /// The rows of a variable grouped by equal value: a function of the variable takes one value
-/// per group, computed once (the scans' sines, [`crate::fit::Projector::increments_on`]).
-pub(crate) struct Groups {
+/// per group ([`Spread`]).
+struct Groups {
     /// The distinct values, increasing.
     pub values: Vec<f64>,
     /// Each row's group.
@@ -348,7 +518,7 @@ pub(crate) struct Groups {
 
 impl Groups {
     /// The groups of equal values among `values`.
-    pub fn new(values: &[f64]) -> Groups {
+    fn new(values: &[f64]) -> Groups {
         let mut order: Vec<usize> = (0..values.len()).collect();
         order.sort_by(|&a, &b| values[a].total_cmp(&values[b]));
         let mut distinct: Vec<f64> = Vec::new();
@@ -364,16 +534,46 @@ impl Groups {
             of_row,
         }
     }
-
-    /// Values per group (rows of `m`, one per group) as values per row.
-    pub fn expand(&self, m: &DMat) -> DMat {
-        DMat::from_fn(self.of_row.len(), m.ncols(), |i, j| m[(self.of_row[i], j)])
-    }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_spread_gives_the_columns_and_products_of_its_functions_at_every_pose() {
+        // Six readings at three positions, each seen at its pose and at a reference pose
+        // (as an R-test reading sees a positioning error): column i = a_i g(x_i) + r_i g(x_ref,i);
+        // the third reading is at its reference position.
+        let x = [10.0, 20.0, 10.0, 30.0, 20.0, 10.0];
+        let x_ref = [0.0, 0.0, 10.0, 25.0, 25.0, 25.0];
+        let a = [1.0, -0.5, 0.3, 2.0, 0.7, -1.1];
+        let r = [-1.0, 0.5, -0.3, -0.4, -0.7, 1.1];
+        let spread = Spread::new(&[(&x, &a), (&x_ref, &r)]);
+        assert_eq!(spread.values(), &[0.0, 10.0, 20.0, 25.0, 30.0]);
+        let g = |v: f64| [v.sin(), (v * v / 100.0).cos()];
+        let b = DMat::from_fn(5, 2, |k, j| g(spread.values()[k])[j]);
+        let direct = DMat::from_fn(6, 2, |i, j| a[i] * g(x[i])[j] + r[i] * g(x_ref[i])[j]);
+        let columns = spread.expand(&b);
+        assert!((&columns - &direct).amax() < 1e-15);
+        // Products with a design under weights, over some rows: Bᵀ (Sᵀ W² X) = Cᵀ W² X.
+        let design = DMat::from_fn(6, 3, |i, j| ((i * 3 + j) as f64).cos());
+        let w2 = DVec::from_fn(6, |i, _| 1.0 + i as f64);
+        let rows = [1, 3, 4];
+        let sums = spread.weighted_sums(&design, &w2, Some(&rows));
+        let want = DMat::from_fn(2, 3, |j, k| {
+            rows.iter()
+                .map(|&i| direct[(i, j)] * w2[i] * design[(i, k)])
+                .sum()
+        });
+        assert!((b.transpose() * sums - want).amax() < 1e-13);
+        let gram = Spread::quadratic(&spread.gram(&w2), &b);
+        let want = direct.transpose() * DMat::from_diagonal(&w2) * &direct;
+        assert!((gram - want).amax() < 1e-12);
+        // On rows only: the same functions, the rows' columns.
+        let on_rows = spread.select_rows(&rows);
+        assert!((on_rows.expand(&b) - direct.select_rows(&rows)).amax() < 1e-15);
+    }
 
     #[test]
     fn bounded_minimum_finds_known_minima_to_tolerance_in_few_evaluations() {

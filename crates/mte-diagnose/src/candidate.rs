@@ -3,9 +3,8 @@
 
 use mte_linalg::{DMat, DVec};
 
-use crate::basis::{
-    Groups, legendre_columns, periods_to_scan, sin_cos_columns, time_constants_to_scan,
-};
+pub use crate::basis::Spread;
+use crate::basis::{legendre_columns, periods_to_scan, sin_cos_columns, time_constants_to_scan};
 use crate::data::{Observations, Variable, VariableKind};
 use crate::term::{Family, Quantity, Summary, Term};
 
@@ -35,7 +34,7 @@ pub trait Candidate: Send + Sync {
     /// Improves the best of the variants once it is known (e.g. refines a scanned period),
     /// given `score`, the weighted residual sum of squares that a term leaves. `None` keeps
     /// the variant as it is.
-    fn refine(&self, _best: usize, _score: &dyn Fn(&Term) -> f64) -> Option<Term> {
+    fn refine(&self, _best: usize, _score: &Score) -> Option<Term> {
         None
     }
 
@@ -59,6 +58,15 @@ pub trait Candidate: Send + Sync {
         self.variants(obs).iter().map(|t| t.columns.ncols()).sum()
     }
 
+    /// The variants as functions of one variable spread over the observations ([`Spread`]):
+    /// the spread and each variant's functions at its values, in the order of
+    /// [`Candidate::variants`] (whose columns are `spread.expand` of them). The diagnosis then
+    /// forms its products with the variants over the variable's distinct values instead of the
+    /// observations. `None` (the default): from the variants' columns.
+    fn spread(&self) -> Option<(std::sync::Arc<Spread>, Vec<DMat>)> {
+        None
+    }
+
     /// What the diagnosis does with the candidate: a cause to search for (the default), a
     /// completion of the base, or a structure probe.
     fn role(&self) -> Role {
@@ -80,6 +88,47 @@ pub trait Candidate: Send + Sync {
             requires: self.requires().map(str::to_string),
             role: self.role(),
         })
+    }
+}
+
+/// What a refinement minimises ([`Candidate::refine`]): the weighted residual sum of squares a
+/// term leaves — of its columns, or, for functions of one variable seen through a [`Spread`],
+/// of their values at the spread's values, which the diagnosis can score without the columns.
+pub struct Score<'a> {
+    term: Box<dyn Fn(&Term) -> f64 + 'a>,
+    spread: Option<Box<SpreadScore<'a>>>,
+}
+
+/// The score of functions at a spread's values ([`Score::of_spread`]).
+type SpreadScore<'a> = dyn Fn(&Spread, &DMat) -> Option<f64> + 'a;
+
+impl<'a> Score<'a> {
+    /// The score `term` of a term's columns.
+    pub fn new(term: impl Fn(&Term) -> f64 + 'a) -> Score<'a> {
+        Score {
+            term: Box::new(term),
+            spread: None,
+        }
+    }
+
+    /// With the score `spread` of functions at a spread's values (`None` where it cannot tell).
+    pub(crate) fn with_spread(
+        mut self,
+        spread: impl Fn(&Spread, &DMat) -> Option<f64> + 'a,
+    ) -> Score<'a> {
+        self.spread = Some(Box::new(spread));
+        self
+    }
+
+    /// The score of `term`.
+    pub fn of(&self, term: &Term) -> f64 {
+        (self.term)(term)
+    }
+
+    /// The score of the term whose columns are `spread.expand(values)`, without forming them;
+    /// `None` where only [`Score::of`] can tell.
+    pub fn of_spread(&self, spread: &Spread, values: &DMat) -> Option<f64> {
+        self.spread.as_ref().and_then(|f| f(spread, values))
     }
 }
 
@@ -147,7 +196,7 @@ impl Candidate for Requires {
         self.inner.variants(obs)
     }
 
-    fn refine(&self, best: usize, score: &dyn Fn(&Term) -> f64) -> Option<Term> {
+    fn refine(&self, best: usize, score: &Score) -> Option<Term> {
         self.inner.refine(best, score)
     }
 
@@ -237,32 +286,7 @@ pub struct Reference {
     pub time_s: Vec<f64>,
 }
 
-impl Reference {
-    /// The reference on the observations `rows` only.
-    fn select_rows(&self, rows: &[usize]) -> Reference {
-        Reference {
-            column: DVec::from_iterator(rows.len(), rows.iter().map(|&i| self.column[i])),
-            coordinate: pick(&self.coordinate, rows),
-            time_s: pick(&self.time_s, rows),
-        }
-    }
-}
-
 impl SlotEffect {
-    /// The slot on the observations `rows` only.
-    fn select_rows(&self, rows: &[usize]) -> SlotEffect {
-        SlotEffect {
-            column: DVec::from_iterator(rows.len(), rows.iter().map(|&i| self.column[i])),
-            reference: self.reference.as_ref().map(|r| r.select_rows(rows)),
-            name: self.name.clone(),
-            label: self.label.clone(),
-            meaning: self.meaning.clone(),
-            quantity: self.quantity,
-            role: self.role.clone(),
-            separated_by: self.separated_by.clone(),
-        }
-    }
-
     /// The effect of a constant error.
     fn constant_column(&self) -> DVec {
         match &self.reference {
@@ -274,27 +298,32 @@ impl SlotEffect {
     /// The effect of the error `g(s)` whose basis functions `basis` evaluates on the axis
     /// coordinates `s` (one column per basis function); reference poses included.
     fn modulated(&self, values: &[f64], basis: &dyn Fn(&[f64]) -> DMat) -> DMat {
-        self.modulated_by(&basis(&self.positions(values)))
-    }
-
-    /// The axis coordinates the basis of an error is evaluated at: the rows' `values`, then the
-    /// reference poses' (one basis over rows and references together, so a range-normalised
-    /// basis, Legendre, is the same function at both).
-    fn positions(&self, values: &[f64]) -> Vec<f64> {
+        let n = self.column.len();
         match &self.reference {
-            None => values.to_vec(),
-            Some(r) => values.iter().chain(r.coordinate.iter()).copied().collect(),
+            None => {
+                let m = basis(values);
+                DMat::from_fn(n, m.ncols(), |i, j| self.column[i] * m[(i, j)])
+            }
+            // One basis over rows and references together, so a range-normalised basis
+            // (Legendre) is the same function at both.
+            Some(r) => {
+                let at: Vec<f64> = values.iter().chain(&r.coordinate).copied().collect();
+                let m = basis(&at);
+                DMat::from_fn(n, m.ncols(), |i, j| {
+                    self.column[i] * m[(i, j)] + r.column[i] * m[(n + i, j)]
+                })
+            }
         }
     }
 
-    /// [`SlotEffect::modulated`] given the basis `m` at [`SlotEffect::positions`].
-    fn modulated_by(&self, m: &DMat) -> DMat {
-        let n = self.column.len();
+    /// How the observations see a function of the slot's axis coordinate, given the rows'
+    /// `values` ([`SlotEffect::modulated`] through their distinct values): at their own pose,
+    /// and at their setup's reference pose when there is one.
+    fn spread(&self, values: &[f64]) -> Spread {
+        let own = (values, self.column.as_slice());
         match &self.reference {
-            None => DMat::from_fn(n, m.ncols(), |i, j| self.column[i] * m[(i, j)]),
-            Some(r) => DMat::from_fn(n, m.ncols(), |i, j| {
-                self.column[i] * m[(i, j)] + r.column[i] * m[(n + i, j)]
-            }),
+            None => Spread::new(&[own]),
+            Some(r) => Spread::new(&[own, (&r.coordinate, r.column.as_slice())]),
         }
     }
 }
@@ -328,9 +357,7 @@ pub fn physical_effects(
         .filter(|d| varies(&d.values))
         .map(|d| d.values.clone());
     let n = obs.len();
-    let settling = time
-        .as_ref()
-        .map(|(t, floor)| std::sync::Arc::new(Settling::new(t, *floor)));
+    let settling = time.as_ref().map(|(t, floor)| Settling::new(t, *floor));
     for slot in slots {
         if slot.column.iter().all(|v| v.abs() < 1e-15) {
             continue;
@@ -423,7 +450,6 @@ pub fn physical_effects(
                     ));
                 }
                 if *positioning {
-                    let effect = slot.clone();
                     let (name, axis_name, slot_name, quantity) = (
                         slot.name.clone(),
                         axis.clone(),
@@ -431,44 +457,38 @@ pub fn physical_effects(
                         slot.quantity,
                     );
                     let separated_by = slot.separated_by.clone();
-                    // The sines at each distinct position once (repeated runs and cycles).
-                    let groups = Groups::new(&effect.positions(&values));
-                    let make = move |p: f64, rows: Option<&[usize]>| {
-                        let basis = |s: &[f64]| sin_cos_columns(s, p);
-                        let cols = match rows {
-                            None => effect.modulated_by(&groups.expand(&basis(&groups.values))),
-                            Some(rows) => effect
-                                .select_rows(rows)
-                                .modulated(&pick(&values, rows), &basis),
-                        };
-                        Term {
-                            name: format!("{name} periodic"),
-                            label: format!(
-                                "periodic positioning error of {axis_name} ({slot_name})"
-                            ),
-                            meaning: format!(
-                                "positioning error of {axis_name} repeating every {} ({})",
-                                format_period(p, rotary),
-                                if rotary {
-                                    "encoder eccentricity or graduation error, worm-gear tooth error"
-                                } else {
-                                    "ball-screw pitch, encoder or gear error"
-                                }
-                            ),
-                            family: Family::Periodic { period: p },
-                            columns: cols,
-                            coefficients: vec![
-                                (format!("{name} periodic sin"), quantity),
-                                (format!("{name} periodic cos"), quantity),
-                            ],
-                            summary: Summary::Amplitude,
-                            exposed_by: Some(axis_name.clone()),
-                            separated_by: separated_by.clone(),
-                        }
+                    let make = move |p: f64, cols: DMat| Term {
+                        name: format!("{name} periodic"),
+                        label: format!("periodic positioning error of {axis_name} ({slot_name})"),
+                        meaning: format!(
+                            "positioning error of {axis_name} repeating every {} ({})",
+                            format_period(p, rotary),
+                            if rotary {
+                                "encoder eccentricity or graduation error, worm-gear tooth error"
+                            } else {
+                                "ball-screw pitch, encoder or gear error"
+                            }
+                        ),
+                        family: Family::Periodic { period: p },
+                        columns: cols,
+                        coefficients: vec![
+                            (format!("{name} periodic sin"), quantity),
+                            (format!("{name} periodic cos"), quantity),
+                        ],
+                        summary: Summary::Amplitude,
+                        exposed_by: Some(axis_name.clone()),
+                        separated_by: separated_by.clone(),
                     };
                     let grid = periods_to_scan(&v.values, rotary);
                     if !grid.is_empty() {
-                        out.push(Box::new(Scan::new(grid, !rotary, make)));
+                        // The sines at each distinct position once (repeated runs and cycles).
+                        out.push(Box::new(Scan::spread(
+                            grid,
+                            !rotary,
+                            slot.spread(&values),
+                            sin_cos_columns,
+                            make,
+                        )));
                     }
                     if let Some(d) = &direction {
                         let cols = DMat::from_fn(n, 1, |i, _| slot.column[i] * 0.5 * d[i]);
@@ -1060,6 +1080,10 @@ impl Candidate for Completion {
 /// on the given rows only.
 pub type ScanTerm = dyn Fn(f64, Option<&[usize]>) -> Term + Send + Sync;
 
+/// The basis functions of a [`Scan::spread`] for one value of its hyper-parameter, at the given
+/// values of the variable.
+pub type SpreadBasis = dyn Fn(&[f64], f64) -> DMat + Send + Sync;
+
 /// One cause with a hyper-parameter scanned over a grid (a period, a time constant); the best
 /// grid value is refined by golden-section search between its neighbours.
 pub struct Scan {
@@ -1067,10 +1091,24 @@ pub struct Scan {
     pub grid: Vec<f64>,
     /// Refine the best grid value (off for values that must stay on the grid, e.g. harmonics).
     pub refine_grid: bool,
-    /// The term for one value.
-    pub make: std::sync::Arc<ScanTerm>,
-    /// The observations the terms are made on (`None`: all).
-    pub rows: Option<std::sync::Arc<[usize]>>,
+    terms: ScanTerms,
+}
+
+/// How a [`Scan`] makes its terms.
+#[derive(Clone)]
+enum ScanTerms {
+    /// Any term, on the observations `rows` (`None`: all).
+    Rows {
+        make: std::sync::Arc<ScanTerm>,
+        rows: Option<std::sync::Arc<[usize]>>,
+    },
+    /// Functions of one variable spread over the observations: the term `make(value, S B)`
+    /// with `B = basis(values, value)`.
+    Spread {
+        spread: std::sync::Arc<Spread>,
+        basis: std::sync::Arc<SpreadBasis>,
+        make: std::sync::Arc<dyn Fn(f64, DMat) -> Term + Send + Sync>,
+    },
 }
 
 impl Scan {
@@ -1083,13 +1121,43 @@ impl Scan {
         Scan {
             grid,
             refine_grid,
-            make: std::sync::Arc::new(make),
-            rows: None,
+            terms: ScanTerms::Rows {
+                make: std::sync::Arc::new(make),
+                rows: None,
+            },
+        }
+    }
+
+    /// A scan over `grid` of functions of one variable seen through `spread`: the term of a
+    /// value is `make(value, columns)` with the columns `spread.expand(basis(values, value))`
+    /// ([`Candidate::spread`]).
+    pub fn spread(
+        grid: Vec<f64>,
+        refine_grid: bool,
+        spread: Spread,
+        basis: impl Fn(&[f64], f64) -> DMat + Send + Sync + 'static,
+        make: impl Fn(f64, DMat) -> Term + Send + Sync + 'static,
+    ) -> Scan {
+        Scan {
+            grid,
+            refine_grid,
+            terms: ScanTerms::Spread {
+                spread: std::sync::Arc::new(spread),
+                basis: std::sync::Arc::new(basis),
+                make: std::sync::Arc::new(make),
+            },
         }
     }
 
     fn term(&self, value: f64) -> Term {
-        (self.make)(value, self.rows.as_deref())
+        match &self.terms {
+            ScanTerms::Rows { make, rows } => make(value, rows.as_deref()),
+            ScanTerms::Spread {
+                spread,
+                basis,
+                make,
+            } => make(value, spread.expand(&basis(spread.values(), value))),
+        }
     }
 }
 
@@ -1098,13 +1166,32 @@ impl Candidate for Scan {
         self.grid.iter().map(|&p| self.term(p)).collect()
     }
 
-    fn refine(&self, best: usize, score: &dyn Fn(&Term) -> f64) -> Option<Term> {
+    fn spread(&self) -> Option<(std::sync::Arc<Spread>, Vec<DMat>)> {
+        let ScanTerms::Spread { spread, basis, .. } = &self.terms else {
+            return None;
+        };
+        let bases = self
+            .grid
+            .iter()
+            .map(|&p| basis(spread.values(), p))
+            .collect();
+        Some((spread.clone(), bases))
+    }
+
+    fn refine(&self, best: usize, score: &Score) -> Option<Term> {
         if !self.refine_grid || self.grid.len() < 3 {
             return None;
         }
         let lo = self.grid[best.saturating_sub(1)];
         let hi = self.grid[(best + 1).min(self.grid.len() - 1)];
-        let f = |p: f64| score(&self.term(p));
+        let f = |p: f64| {
+            if let ScanTerms::Spread { spread, basis, .. } = &self.terms
+                && let Some(s) = score.of_spread(spread, &basis(spread.values(), p))
+            {
+                return s;
+            }
+            score.of(&self.term(p))
+        };
         // To 1e-5 of the bracket (two grid steps): far below the uncertainty of a period or
         // time constant the data can tell.
         let (p, fp) = crate::basis::bounded_minimum(lo, hi, 1e-5 * (hi - lo).abs(), f);
@@ -1122,15 +1209,28 @@ impl Candidate for Scan {
     }
 
     fn on_rows(&self, _obs: &Observations, rows: &[usize]) -> Box<dyn Candidate> {
-        let rows: Vec<usize> = match &self.rows {
-            Some(mine) => rows.iter().map(|&i| mine[i]).collect(),
-            None => rows.to_vec(),
+        let terms = match &self.terms {
+            ScanTerms::Rows { make, rows: mine } => ScanTerms::Rows {
+                make: make.clone(),
+                rows: Some(match mine {
+                    Some(mine) => rows.iter().map(|&i| mine[i]).collect(),
+                    None => rows.into(),
+                }),
+            },
+            ScanTerms::Spread {
+                spread,
+                basis,
+                make,
+            } => ScanTerms::Spread {
+                spread: std::sync::Arc::new(spread.select_rows(rows)),
+                basis: basis.clone(),
+                make: make.clone(),
+            },
         };
         Box::new(Scan {
             grid: self.grid.clone(),
             refine_grid: self.refine_grid,
-            make: self.make.clone(),
-            rows: Some(rows.into()),
+            terms,
         })
     }
 }
@@ -1157,7 +1257,7 @@ impl Candidate for Alternatives {
 fn drift_candidates(
     constant: &Term,
     reference: Option<&Reference>,
-    settling: &std::sync::Arc<Settling>,
+    settling: &Settling,
 ) -> Vec<Box<dyn Candidate>> {
     let (t, t0) = (&settling.times[..], settling.t0);
     // Per observation: the constant's column, its reference part and the reference time (the
@@ -1195,84 +1295,63 @@ fn drift_candidates(
         separated_by: None,
     };
     let (name, label) = (constant.name.clone(), constant.label.clone());
-    let column: Vec<f64> = col.iter().copied().collect();
-    let referenced = reference.is_some();
-    let grid = settling.grid.clone();
-    let settling = settling.clone();
-    let make = move |tau: f64, rows: Option<&[usize]>| Term {
+    let make = move |tau: f64, columns: DMat| Term {
         name: format!("{name} drift exp"),
         label: format!("thermal drift of {name} (first-order)"),
         meaning: format!("{label} settles towards a new value with a thermal time constant"),
         family: Family::Drift {
             time_constant_s: Some(tau),
         },
-        columns: {
-            let d = settling.of_readings(tau);
-            // The reference readings' settling, once per run of equal reference times.
-            let mut last_ref = (f64::NAN, 0.0);
-            let mut at = |i: usize| {
-                if !referenced {
-                    return column[i] * d[i];
-                }
-                if t_ref[i] != last_ref.0 {
-                    last_ref = (t_ref[i], settling.at(t_ref[i], tau));
-                }
-                column[i] * d[i] - reference_part[i] * (d[i] - last_ref.1)
-            };
-            match rows {
-                None => DMat::from_fn(d.len(), 1, |i, _| at(i)),
-                Some(rows) => DMat::from_fn(rows.len(), 1, |k, _| at(rows[k])),
-            }
-        },
+        columns,
         coefficients: vec![(format!("{name} change"), q)],
         summary: Summary::EachCoefficient,
         exposed_by: Some("t".into()),
         separated_by: None,
     };
-    let exponential = Scan::new(grid, true, make);
+    // The settling d(t) at the reading, with the constant's column less its reference part,
+    // and at the reference pose's time, with the reference part.
+    let at_reading: Vec<f64> = col
+        .iter()
+        .zip(&reference_part)
+        .map(|(c, r)| c - r)
+        .collect();
+    let spread = match reference {
+        Some(_) => Spread::new(&[(t, &at_reading), (&t_ref, &reference_part)]),
+        None => Spread::new(&[(t, &at_reading)]),
+    };
+    let exponential = Scan::spread(
+        settling.grid.clone(),
+        true,
+        spread,
+        move |t: &[f64], tau: f64| Settling::at(t0, t, tau),
+        make,
+    );
     vec![Box::new(linear), Box::new(exponential)]
 }
 
-/// The first-order settling `1 − exp(−(t − t₀)/τ)` of the readings' times `t` (`t₀` the
-/// first) over the time constants the first-order drifts scan
-/// ([`time_constants_to_scan`]): every drift of a dataset scans the same grid on the same
-/// readings, so each grid value's settling is computed once and shared.
+/// The readings' times and the time constants the first-order drifts scan over them
+/// ([`time_constants_to_scan`]): the same for every drift of a dataset.
 struct Settling {
     times: Vec<f64>,
+    /// The first reading's time.
     t0: f64,
     grid: Vec<f64>,
-    on_grid: Vec<std::sync::OnceLock<Vec<f64>>>,
 }
 
 impl Settling {
-    /// The settling of the readings at `times`, the shortest time constant scanned `floor`.
+    /// The readings at `times`, the shortest time constant scanned `floor`.
     fn new(times: &[f64], floor: f64) -> Settling {
-        let grid = time_constants_to_scan(times, floor);
         Settling {
             times: times.to_vec(),
             t0: times.iter().copied().fold(f64::INFINITY, f64::min),
-            on_grid: grid.iter().map(|_| std::sync::OnceLock::new()).collect(),
-            grid,
+            grid: time_constants_to_scan(times, floor),
         }
     }
 
-    /// The settling at time `t` for the time constant `tau`.
-    fn at(&self, t: f64, tau: f64) -> f64 {
-        1.0 - (-(t - self.t0) / tau).exp()
-    }
-
-    /// Every reading's settling for the time constant `tau` (computed once for a grid value).
-    fn of_readings(&self, tau: f64) -> std::borrow::Cow<'_, [f64]> {
-        let all = || {
-            self.times
-                .iter()
-                .map(|&t| self.at(t, tau))
-                .collect::<Vec<_>>()
-        };
-        match self.grid.iter().position(|&g| g == tau) {
-            Some(k) => std::borrow::Cow::Borrowed(&self.on_grid[k].get_or_init(all)[..]),
-            None => std::borrow::Cow::Owned(all()),
-        }
+    /// The first-order settling `1 − exp(−(t − t₀)/τ)` at the times `t` for the time
+    /// constant `tau` (one column).
+    fn at(t0: f64, t: &[f64], tau: f64) -> DMat {
+        DMat::from_fn(t.len(), 1, |i, _| 1.0 - (-(t[i] - t0) / tau).exp())
     }
 }
 
@@ -1282,10 +1361,6 @@ fn coefficient_name(name: &str, suffix: &str, k: usize, width: usize) -> String 
     } else {
         format!("{name}{suffix}[{k}]")
     }
-}
-
-fn pick(values: &[f64], rows: &[usize]) -> Vec<f64> {
-    rows.iter().map(|&i| values[i]).collect()
 }
 
 fn column_matrix(c: &DVec) -> DMat {
@@ -1340,11 +1415,7 @@ mod tests {
             &column + &reference.column,
             Quantity::Length,
         );
-        let drifts = drift_candidates(
-            &constant,
-            Some(&reference),
-            &std::sync::Arc::new(Settling::new(&t, 10.0)),
-        );
+        let drifts = drift_candidates(&constant, Some(&reference), &Settling::new(&t, 10.0));
         let obs = Observations {
             values: DVec::zeros(4),
             sigma: None,

@@ -10,12 +10,12 @@ use mte_linalg::{DMat, DVec, stats};
 use rayon::prelude::*;
 use serde::Serialize;
 
-use crate::candidate::{Candidate, Role};
+use crate::candidate::{Candidate, Role, Score, Spread};
 use crate::data::{Observations, VariableKind};
 use crate::fit::{
-    Directions, Folds, Increment, Projector, SEPARABILITY_TOLERANCE, Solution, block_grams, design,
-    max_abs, rms, separable_columns, solve, tr_mul, weighted_products, weighted_products_by_rows,
-    whitened_r, whitening,
+    Directions, Folds, Increment, Projector, SEPARABILITY_TOLERANCE, Solution, SpreadProducts,
+    block_grams, design, max_abs, rms, separable_columns, solve, tr_mul, weighted_products,
+    weighted_products_by_rows, whitened_r, whitening,
 };
 use crate::structure::{StructureTest, structure_tests};
 use crate::term::{Estimate, Family, Quantity, Summary, Term};
@@ -1189,6 +1189,9 @@ fn check_params(p: &DiagnoseParams) -> Result<()> {
 #[derive(Default)]
 struct Pool {
     variants: Vec<Vec<Term>>,
+    /// Of an entry whose variants are functions of one variable ([`Candidate::spread`]): the
+    /// spread and the variants' functions at its values side by side.
+    spreads: Vec<Option<EntrySpread>>,
     source: Vec<usize>,
     /// Entry by the name of its first variant.
     by_name: HashMap<String, usize>,
@@ -1208,6 +1211,10 @@ struct Pool {
     /// and the outer folds' mostly complete with the same orders).
     completion_products: std::sync::Mutex<HashMap<usize, std::sync::Arc<EntryProducts>>>,
 }
+
+/// A pool entry's variants as functions of one variable: `spread.expand(values)` are their
+/// columns side by side.
+type EntrySpread = (std::sync::Arc<Spread>, DMat);
 
 /// `Cᵢᵀ W² C` of one pool entry's first variant `Cᵢ` with every variant's columns `C` side by
 /// side: on all rows, and the share of each outer fold's test rows.
@@ -1234,20 +1241,38 @@ struct Products {
 
 impl Pool {
     /// The variants of `candidates` on `obs` that a pool holds (none for a probe), by
-    /// candidate. Building them (a scan's columns for every period) is independent per
-    /// candidate; collected in order, so the pool is the same for any thread count.
-    fn variants_of(obs: &Observations, candidates: &[Box<dyn Candidate>]) -> Vec<Vec<Term>> {
+    /// candidate, with their spread where they have one ([`Candidate::spread`]). Building them
+    /// (a scan's columns for every period) is independent per candidate; collected in order,
+    /// so the pool is the same for any thread count.
+    fn variants_of(
+        obs: &Observations,
+        candidates: &[Box<dyn Candidate>],
+    ) -> Vec<(Vec<Term>, Option<EntrySpread>)> {
         let n = obs.len();
         candidates
             .par_iter()
             .map(|c| {
                 if c.role() == Role::Probe {
-                    return Vec::new();
+                    return (Vec::new(), None);
                 }
-                c.variants(obs)
-                    .into_iter()
-                    .filter(|t| !t.is_invisible() && t.columns.nrows() == n)
-                    .collect()
+                let kept = |t: &Term| !t.is_invisible() && t.columns.nrows() == n;
+                let variants = c.variants(obs);
+                let spread = c.spread().map(|(spread, bases)| {
+                    let kept: Vec<DMat> = bases
+                        .into_iter()
+                        .zip(&variants)
+                        .filter_map(|(b, t)| kept(t).then_some(b))
+                        .collect();
+                    let width = kept.iter().map(DMat::ncols).sum();
+                    let mut values = DMat::zeros(spread.values().len(), width);
+                    let mut at = 0;
+                    for b in kept {
+                        values.columns_mut(at, b.ncols()).copy_from(&b);
+                        at += b.ncols();
+                    }
+                    (spread, values)
+                });
+                (variants.into_iter().filter(kept).collect(), spread)
             })
             .collect()
     }
@@ -1258,7 +1283,7 @@ impl Pool {
     /// all rows). A candidate named like a base term is the base's own: not in the pool.
     fn new(
         obs: &Observations,
-        built: Vec<Vec<Term>>,
+        built: Vec<(Vec<Term>, Option<EntrySpread>)>,
         base: &[Term],
         x_base: DMat,
         w: &DVec,
@@ -1266,12 +1291,14 @@ impl Pool {
     ) -> Pool {
         let n = obs.len();
         let mut variants = Vec::new();
+        let mut spreads = Vec::new();
         let mut source = Vec::new();
-        for (k, v) in built.into_iter().enumerate() {
+        for (k, (v, spread)) in built.into_iter().enumerate() {
             if v.is_empty() || base.iter().any(|b| b.name == v[0].name) {
                 continue;
             }
             variants.push(v);
+            spreads.push(spread);
             source.push(k);
         }
         let by_name = variants
@@ -1293,6 +1320,7 @@ impl Pool {
             .collect();
         let mut pool = Pool {
             variants,
+            spreads,
             source,
             by_name,
             offsets,
@@ -1339,12 +1367,62 @@ impl Pool {
     /// `xᵀ W² C` with every variant's columns `C`, per outer fold's test rows (one share: all
     /// rows when there are no outer folds).
     fn fold_products(&self, x: &DMat) -> Vec<DMat> {
-        let blocks = self.column_blocks();
-        if self.outer.is_empty() {
-            vec![weighted_products(x, &self.w2, &blocks)]
+        self.products_of(x, &self.w2, &self.outer)
+    }
+
+    /// `xᵀ diag(w2) C` with every variant's columns `C` side by side, over each of the groups
+    /// of rows `groups` (none: one product, of all rows): from the columns, or through the
+    /// distinct values of an entry's spread (`Sᵀ diag(w2) x`, formed once for all its variants).
+    fn products_of(&self, x: &DMat, w2: &DVec, groups: &[Vec<usize>]) -> Vec<DMat> {
+        let dense: Vec<&DMat> = self
+            .variants
+            .iter()
+            .zip(&self.spreads)
+            .filter(|(_, s)| s.is_none())
+            .flat_map(|(v, _)| v.iter().map(|t| &t.columns))
+            .collect();
+        let dense = if groups.is_empty() {
+            vec![weighted_products(x, w2, &dense)]
         } else {
-            weighted_products_by_rows(x, &self.w2, &self.outer, &blocks)
-        }
+            weighted_products_by_rows(x, w2, groups, &dense)
+        };
+        let rows: Vec<Option<&[usize]>> = if groups.is_empty() {
+            vec![None]
+        } else {
+            groups.iter().map(|g| Some(&g[..])).collect()
+        };
+        let total = self.variants.iter().flatten().map(Term::width).sum();
+        dense
+            .into_iter()
+            .zip(rows)
+            .map(|(dense, rows)| {
+                let mut out = DMat::zeros(x.ncols(), total);
+                let mut from = 0;
+                for (ci, spread) in self.spreads.iter().enumerate() {
+                    let at = self.offsets[ci][0];
+                    match spread {
+                        None => {
+                            let width: usize = self.variants[ci].iter().map(Term::width).sum();
+                            out.columns_mut(at, width)
+                                .copy_from(&dense.columns(from, width));
+                            from += width;
+                        }
+                        Some((spread, values)) => {
+                            let z = spread.weighted_sums(x, w2, rows);
+                            out.columns_mut(at, values.ncols())
+                                .copy_from(&tr_mul(&z, values));
+                        }
+                    }
+                }
+                out
+            })
+            .collect()
+    }
+
+    /// `xᵀ W² C` with every variant's columns `C` over all rows, under weights `w`.
+    fn products(&self, x: &DMat, w: &DVec) -> DMat {
+        let mut all = self.products_of(x, &w.component_mul(w), &[]);
+        all.pop().expect("one product")
     }
 
     /// Every variant's columns, in pool order.
@@ -1389,7 +1467,7 @@ impl Pool {
             .collect();
         if !new.is_empty() {
             let columns = design(&new, w.len());
-            let rows = weighted_products(&columns, &w.component_mul(w), &self.column_blocks());
+            let rows = self.products(&columns, w);
             let mut at = 0;
             for (t, i) in beyond.iter().zip(&mut index).filter(|(_, i)| i.is_none()) {
                 *i = Some(formed.len());
@@ -1432,11 +1510,7 @@ impl Pool {
                 None => {
                     let p = rows.iter().map(DMat::nrows).sum::<usize>();
                     let c = x.columns(p, t.width()).into_owned();
-                    rows.push(weighted_products(
-                        &c,
-                        &w.component_mul(w),
-                        &self.column_blocks(),
-                    ));
+                    rows.push(self.products(&c, w));
                 }
             }
         }
@@ -1551,6 +1625,30 @@ struct CompletionRows {
     rows: HashMap<usize, DMat>,
     /// `(CᵀW²C, CᵀW²y)` of each entry under the search's weights ([`Pool::base_rows`]).
     own: HashMap<usize, (DMat, DVec)>,
+}
+
+/// The score of a refinement against `projector` ([`Score`]): `rss` less a trial's increment,
+/// from its columns or, for functions seen through a spread on the projector's rows, from the
+/// spread's products with the projector, formed once per spread (a golden-section search then
+/// costs the spread's distinct values per trial, not the observations).
+fn refine_score(projector: &Projector, rss: f64) -> Score<'_> {
+    let formed: std::cell::RefCell<Option<(*const Spread, SpreadProducts)>> = Default::default();
+    Score::new(move |t: &Term| rss - projector.increment(&t.columns).delta_rss).with_spread(
+        move |spread, values| {
+            if spread.rows() != projector.rows() {
+                return None;
+            }
+            let mut formed = formed.borrow_mut();
+            if !formed
+                .as_ref()
+                .is_some_and(|(p, _)| std::ptr::eq(*p, spread))
+            {
+                *formed = Some((spread, projector.spread_products(spread)));
+            }
+            let (_, products) = formed.as_ref().expect("formed above");
+            Some(rss - projector.increment_spread(products, values).delta_rss)
+        },
+    )
 }
 
 /// A term the search added, with where it came from.
@@ -1953,7 +2051,7 @@ impl Searcher<'_> {
                 .par_iter()
                 .map(|&g| {
                     let (ci, vi, inc, peaks) = &graded[g];
-                    let score = |t: &Term| rss - projector.increment(&t.columns).delta_rss;
+                    let score = refine_score(&projector, rss);
                     // Each peak refined (the grid's best only when refining improves it); the
                     // first with the largest reduction, if it beats the grid's best.
                     peaks
@@ -2372,7 +2470,7 @@ impl Searcher<'_> {
             };
             let Some(refined) = self
                 .chosen_candidate(&chosen[j])
-                .refine(chosen[j].variant, &rss_with)
+                .refine(chosen[j].variant, &Score::new(rss_with))
             else {
                 continue;
             };
@@ -2422,7 +2520,7 @@ impl Searcher<'_> {
             return;
         };
         let rechosen = candidate
-            .refine(best, &rss_with)
+            .refine(best, &Score::new(rss_with))
             .filter(|r| free(r) && rss_with(r) < rss_with(&variants[best]))
             .unwrap_or_else(|| variants[best].clone());
         let (term, variant) = if rss_with(&rechosen) < rss_with(&c.term) {
@@ -3573,7 +3671,7 @@ fn period_modes(
     optima.sort_by(|&a, &b| profile[b].1.total_cmp(&profile[a].1));
     optima.retain(|&i| profile[i].1 >= PEAK_SHARE * delta0);
     optima.truncate(MAX_MODES);
-    let score = |t: &Term| rss_without - projector.increment(&t.columns).delta_rss;
+    let score = refine_score(projector, rss_without);
     let refined: Vec<(f64, f64, Term)> = optima
         .into_iter()
         .map(|i| {

@@ -7,7 +7,7 @@ use mte_linalg::bridge::{as_faer, gram, product};
 use mte_linalg::nalgebra::{DMatrixView, Dyn, SymmetricEigen};
 use mte_linalg::{DMat, DVec};
 
-use crate::basis::Groups;
+use crate::basis::Spread;
 use crate::data::Observations;
 use crate::term::Term;
 
@@ -602,6 +602,17 @@ pub(crate) struct Projector {
     qtr: DVec,
 }
 
+/// A projector's products with the functions of one variable spread over its rows
+/// ([`Projector::spread_products`]).
+pub(crate) struct SpreadProducts {
+    /// `Sᵀ W Q` (values × directions).
+    qs: DMat,
+    /// `Sᵀ W r_w`.
+    sr: DVec,
+    /// `Sᵀ W² S` ([`Spread::gram`]).
+    gram: Vec<(usize, usize, f64)>,
+}
+
 /// What a candidate adds beyond the current model.
 #[derive(Debug, Clone)]
 pub(crate) struct Increment {
@@ -871,6 +882,11 @@ impl Projector {
         self.map.nrows()
     }
 
+    /// The number of observations.
+    pub fn rows(&self) -> usize {
+        self.w.len()
+    }
+
     /// Rank of the model.
     pub fn rank(&self) -> usize {
         self.q.ncols()
@@ -1023,50 +1039,68 @@ impl Projector {
     }
 
     /// [`Projector::increments`] of `count` candidates that are functions of one variable:
-    /// candidate `k` is `basis(k, v)` evaluated on the variable's distinct values `v`
-    /// (`groups`, of this projector's rows). Its products with the model and the residuals are
-    /// sums over the rows of each value, formed once: a scan over repeated positions (runs over
-    /// the same targets, program cycles) costs the distinct positions, not the observations.
+    /// candidate `k` has the columns `spread.expand(basis(k, v))`, `v` the variable's distinct
+    /// values ([`Spread::values`]). Its products with the model and the residuals come from
+    /// sums over the rows of each value, formed once ([`Projector::spread_products`]): a scan
+    /// over repeated positions (runs over the same targets, program cycles) costs the distinct
+    /// positions, not the observations.
     pub fn increments_on(
         &self,
-        groups: &Groups,
+        spread: &Spread,
         count: usize,
         basis: impl Fn(usize, &[f64]) -> DMat,
     ) -> Vec<Increment> {
-        let n = self.w.len();
-        assert_eq!(groups.of_row.len(), n, "one group per row of the projector");
-        let (m, r) = (groups.values.len(), self.q.ncols());
-        // Σ w², Σ w r_w and Σ w q over each value's rows.
-        let mut s2 = DVec::zeros(m);
-        let mut sr = DVec::zeros(m);
-        for (i, &u) in groups.of_row.iter().enumerate() {
-            s2[u] += self.w[i] * self.w[i];
-            sr[u] += self.w[i] * self.rw[i];
-        }
-        let mut qs = DMat::zeros(m, r);
-        for j in 0..r {
-            let (from, to) = (self.q.column(j), &mut qs.column_mut(j));
-            for (i, &u) in groups.of_row.iter().enumerate() {
-                to[u] += self.w[i] * from[i];
-            }
-        }
+        let products = self.spread_products(spread);
         let mut out = Vec::with_capacity(count);
-        let values = |k: usize| Cow::Owned(basis(k, &groups.values));
-        in_batches(count, m, values, |batch, cs| {
-            let a = (r > 0).then(|| tr_mul(&qs, &cs));
+        let values = |k: usize| Cow::Owned(basis(k, spread.values()));
+        in_batches(count, spread.values().len(), values, |batch, cs| {
+            let a = (self.q.ncols() > 0).then(|| tr_mul(&products.qs, &cs));
             let mut at = 0;
             for c in batch {
                 let k = c.ncols();
-                let mut weighted = c.clone().into_owned();
-                for mut column in weighted.column_iter_mut() {
-                    column.component_mul_assign(&s2);
-                }
                 let ak = a.as_ref().map(|a| a.columns(at, k));
-                out.push(self.increment_from(c.tr_mul(&weighted), c.tr_mul(&sr), ak));
+                out.push(self.increment_from_spread(&products, c, ak));
                 at += k;
             }
         });
         out
+    }
+
+    /// The products of this projector's basis, weights and residuals with the functions of
+    /// one variable `spread` (on the projector's rows): `Sᵀ W Q`, `Sᵀ W r_w`, `Sᵀ W² S`.
+    pub fn spread_products(&self, spread: &Spread) -> SpreadProducts {
+        assert_eq!(
+            spread.rows(),
+            self.w.len(),
+            "a spread on the projector's rows"
+        );
+        let rw = DMat::from_column_slice(self.rw.len(), 1, self.rw.as_slice());
+        SpreadProducts {
+            qs: spread.weighted_sums(&self.q, &self.w, None),
+            sr: spread
+                .weighted_sums(&rw, &self.w, None)
+                .column(0)
+                .into_owned(),
+            gram: spread.gram(&self.w.component_mul(&self.w)),
+        }
+    }
+
+    /// [`Projector::increment`] of the functions `b` of a spread's values (columns
+    /// `spread.expand(b)`), from the spread's products with this projector: no pass over the
+    /// observations.
+    pub fn increment_spread(&self, products: &SpreadProducts, b: &DMat) -> Increment {
+        let a = (self.q.ncols() > 0).then(|| tr_mul(&products.qs, b));
+        self.increment_from_spread(products, b, a.as_ref().map(|a| a.columns(0, b.ncols())))
+    }
+
+    fn increment_from_spread(
+        &self,
+        products: &SpreadProducts,
+        b: &DMat,
+        a: Option<DMatView<'_>>,
+    ) -> Increment {
+        let gram = Spread::quadratic(&products.gram, b);
+        self.increment_from(gram, b.tr_mul(&products.sr), a)
     }
 
     /// The folds' fits of the projector's model (design `x`, observations `y`), on its basis.
@@ -1690,7 +1724,7 @@ mod tests {
     }
 
     #[test]
-    fn increments_from_groups_and_from_products_equal_direct_ones() {
+    fn increments_from_spreads_and_from_products_equal_direct_ones() {
         let n = 300;
         let (x, y, w) = problem(n);
         let fit = Projector::fit(&x.columns(0, 4).into_owned(), &y, &w);
@@ -1700,15 +1734,28 @@ mod tests {
         let direct = fit.increments(periods.len(), |k| {
             Cow::Owned(crate::basis::sin_cos_columns(&v, periods[k]))
         });
-        let groups = Groups::new(&v);
-        assert_eq!(groups.values.len(), 23);
-        let grouped = fit.increments_on(&groups, periods.len(), |k, values| {
+        let ones = vec![1.0; n];
+        let spread = Spread::new(&[(&v, &ones)]);
+        assert_eq!(spread.values().len(), 23);
+        let grouped = fit.increments_on(&spread, periods.len(), |k, values| {
             crate::basis::sin_cos_columns(values, periods[k])
         });
-        for (d, g) in direct.iter().zip(&grouped) {
-            assert_eq!(d.new_rank, g.new_rank);
-            assert!((d.delta_rss - g.delta_rss).abs() < 1e-9 * d.delta_rss);
-            assert!((d.separability - g.separability).abs() < 1e-9);
+        // Seen at two poses with weights (an R-test's reading and its centring).
+        let at_ref: Vec<f64> = (0..n).map(|i| ((i / 50) * 5) as f64 * 3.7).collect();
+        let (a, r): (Vec<f64>, Vec<f64>) = (0..n)
+            .map(|i| ((i as f64 * 0.37).sin(), -(i as f64 * 0.11).cos()))
+            .unzip();
+        let two = Spread::new(&[(&v, &a), (&at_ref, &r)]);
+        let products = fit.spread_products(&two);
+        let at_two = |k: usize| crate::basis::sin_cos_columns(two.values(), periods[k]);
+        for (k, (d, g)) in direct.iter().zip(&grouped).enumerate() {
+            let d2 = fit.increment(&two.expand(&at_two(k)));
+            let g2 = fit.increment_spread(&products, &at_two(k));
+            for (d, g) in [(d, g), (&d2, &g2)] {
+                assert_eq!(d.new_rank, g.new_rank);
+                assert!((d.delta_rss - g.delta_rss).abs() < 1e-9 * d.delta_rss);
+                assert!((d.separability - g.separability).abs() < 1e-9);
+            }
         }
         // From the products alone: CᵀW²C, CᵀW²y, QᵀWC and QᵀWy.
         let c = crate::basis::sin_cos_columns(&v, periods[1]);

@@ -13,8 +13,8 @@ pub mod structure;
 pub mod term;
 
 pub use candidate::{
-    Alternatives, BaseModelSpec, Candidate, ComponentSpec, Reference, Requires, Role, SlotEffect,
-    SlotRole, physical_effects,
+    Alternatives, BaseModelSpec, Candidate, ComponentSpec, Reference, Requires, Role, Score,
+    SlotEffect, SlotRole, Spread, physical_effects,
 };
 pub use data::{Observations, Variable, VariableKind};
 pub use engine::{

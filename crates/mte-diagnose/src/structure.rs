@@ -6,7 +6,7 @@ use std::borrow::Cow;
 use mte_linalg::{DMat, DVec, stats};
 use serde::Serialize;
 
-use crate::basis::{Groups, legendre_columns, periods_to_scan, sin_cos_columns};
+use crate::basis::{Spread, legendre_columns, periods_to_scan, sin_cos_columns};
 use crate::data::{Observations, Variable, VariableKind};
 use crate::fit::{Projector, select, select_rows};
 use crate::term::Term;
@@ -195,8 +195,9 @@ pub(crate) fn structure_tests(
                         None => (&rows[ch], &projectors[ch]),
                     };
                     let on_channel: Vec<f64> = scan_rows.iter().map(|&i| scan_values[i]).collect();
+                    let ones = vec![1.0; on_channel.len()];
                     let increments = scan_projector.increments_on(
-                        &Groups::new(&on_channel),
+                        &Spread::new(&[(&on_channel, &ones)]),
                         periods.len(),
                         |k, values| sin_cos_columns(values, periods[k]),
                     );
