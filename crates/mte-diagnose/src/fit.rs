@@ -311,6 +311,8 @@ pub(crate) struct FoldFits<'a> {
 struct FoldFit {
     /// The basis on the fold's test rows, `Q_T`.
     qt: DMat,
+    /// The design on the fold's test rows, `X_T`.
+    xt: DMat,
     /// `M⁺`, `M = I − Q_TᵀQ_T`.
     m_pinv: DMat,
     /// `Qᵀ W y − Q_Tᵀ (W y)_T`: the training rows' share of `Qᵀ W y`.
@@ -379,6 +381,7 @@ impl<'a> FoldFits<'a> {
                 let g = &qty - qt.tr_mul(&select(&yw, test));
                 FoldFit {
                     qt,
+                    xt: select_rows(x, test),
                     m_pinv: pinv_psd(m),
                     g,
                 }
@@ -446,12 +449,12 @@ impl<'a> FoldFits<'a> {
             };
             let beta = &*self.map * (&u - &avc * &v);
             let gamma = (&vc * &v).component_mul(&scale_c);
-            for &i in test {
-                let mut pred = self.x.row(i).dot(&beta.transpose());
-                if k > 0 {
-                    pred += c.row(i).dot(&gamma.transpose());
-                }
-                out[i] = self.y[i] - pred;
+            let mut pred = &fit.xt * &beta;
+            if k > 0 {
+                pred += select_rows(c, test) * &gamma;
+            }
+            for (&i, p) in test.iter().zip(pred.iter()) {
+                out[i] = self.y[i] - p;
             }
         }
         out
