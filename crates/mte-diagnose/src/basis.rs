@@ -341,7 +341,7 @@ pub(crate) fn bounded_minimum(
 /// with its own sensitivity (an R-test reading sees a positioning error at its pose and, with
 /// the opposite sign, at its setup's centring): `S B`, with `B` the functions at the variable's
 /// `m` distinct values and `S` an `n × m` matrix of a few entries per row. A scan over many
-/// periods of such functions ([`Candidate::spread`]) costs the distinct values, not the
+/// periods of such functions ([`crate::Candidate::spread`]) costs the distinct values, not the
 /// observations, in the diagnosis' products: runs and program cycles repeat their positions.
 #[derive(Debug, Clone)]
 pub struct Spread {
@@ -366,11 +366,21 @@ impl Spread {
             "one value and one sensitivity per observation at every pose"
         );
         let all: Vec<f64> = poses.iter().flat_map(|p| p.0.iter().copied()).collect();
-        let groups = Groups::new(&all);
+        // Each row's value's rank among the distinct values.
+        let mut order: Vec<usize> = (0..all.len()).collect();
+        order.sort_by(|&a, &b| all[a].total_cmp(&all[b]));
+        let mut values: Vec<f64> = Vec::new();
+        let mut group = vec![0; all.len()];
+        for i in order {
+            if values.last() != Some(&all[i]) {
+                values.push(all[i]);
+            }
+            group[i] = values.len() - 1;
+        }
         Spread {
-            values: groups.values,
+            values,
             rows,
-            group: groups.of_row,
+            group,
             weight: poses.iter().flat_map(|p| p.1.iter().copied()).collect(),
         }
     }
@@ -504,35 +514,6 @@ impl Spread {
             }
         }
         out
-    }
-}
-
-/// The rows of a variable grouped by equal value: a function of the variable takes one value
-/// per group ([`Spread`]).
-struct Groups {
-    /// The distinct values, increasing.
-    pub values: Vec<f64>,
-    /// Each row's group.
-    pub of_row: Vec<usize>,
-}
-
-impl Groups {
-    /// The groups of equal values among `values`.
-    fn new(values: &[f64]) -> Groups {
-        let mut order: Vec<usize> = (0..values.len()).collect();
-        order.sort_by(|&a, &b| values[a].total_cmp(&values[b]));
-        let mut distinct: Vec<f64> = Vec::new();
-        let mut of_row = vec![0; values.len()];
-        for i in order {
-            if distinct.last() != Some(&values[i]) {
-                distinct.push(values[i]);
-            }
-            of_row[i] = distinct.len() - 1;
-        }
-        Groups {
-            values: distinct,
-            of_row,
-        }
     }
 }
 
