@@ -55,7 +55,8 @@ pub struct Outcome {
     /// ([`mte_diagnose::Diagnosis::compound`]).
     pub compound: usize,
     /// The findings of those groups: the findings whose form the report qualifies (one effect
-    /// of a form no candidate has, or a period and shape the data do not determine).
+    /// of a form no candidate has, a period and shape the data do not determine, or a wave too
+    /// long to tell from a smooth error).
     pub qualified: Vec<String>,
     /// Readings the diagnosis lists as outliers ([`mte_diagnose::Diagnosis::outliers`]).
     pub outliers: usize,
@@ -262,6 +263,9 @@ pub struct FdrSummary {
     pub errors: usize,
     /// Datasets with at least one finding.
     pub with_finding: usize,
+    /// Of those, datasets where the report qualifies every finding (a form, period or cause the
+    /// data cannot tell: [`Outcome::qualified`]).
+    pub all_qualified: usize,
     /// Datasets whose verdict is "no significant discrepancy".
     pub no_discrepancy: usize,
     /// Datasets where the diagnosis lists a reading as an outlier (clean data have none).
@@ -332,6 +336,12 @@ pub fn fdr_with(
         n,
         errors: records.len() - ok.len(),
         with_finding: ok.iter().filter(|(_, o)| !o.findings.is_empty()).count(),
+        all_qualified: ok
+            .iter()
+            .filter(|(_, o)| {
+                !o.findings.is_empty() && o.findings.iter().all(|f| o.qualified.contains(&f.name))
+            })
+            .count(),
         no_discrepancy: ok
             .iter()
             .filter(|(_, o)| o.verdict == mte_diagnose::Verdict::NoDiscrepancy)
@@ -1266,8 +1276,11 @@ than the user's cubic; the base's completions must hold them (on densely sampled
 degree 15, and all their orders at once where no block of three alone is significant). Along an \
 ISO 230-2 axis of 15–25 targets a wave of ⅕ stroke is three to five targets long, a shape no \
 polynomial the targets can carry holds: it is found as a periodic error of that length, which \
-it is.\n\n\
-| kind | datasets | errors | with a finding | verdict \"no significant discrepancy\" | with a reading listed as an outlier | most frequent findings | σ0 (min / 10 % / median / 90 % / max) | held-out RMS ÷ σ, base → diagnosed (median) |\n|---|---|---|---|---|---|---|---|---|"
+it is, and the report says that these data cannot tell it from a smooth error of that shape \
+(fewer than six repeats over the travel) or that its period is one of several aliases. *of \
+which every finding qualified*: of the datasets with a finding, those whose report qualifies \
+each finding so (no confident name).\n\n\
+| kind | datasets | errors | with a finding | of which every finding qualified | verdict \"no significant discrepancy\" | with a reading listed as an outlier | most frequent findings | σ0 (min / 10 % / median / 90 % / max) | held-out RMS ÷ σ, base → diagnosed (median) |\n|---|---|---|---|---|---|---|---|---|---|"
         );
         for f in &r.fdr {
             let q = f.sigma0.map_or("–".into(), |q| {
@@ -1281,7 +1294,7 @@ it is.\n\n\
                 .map_or("–".into(), |(a, b)| format!("{a:.2} → {b:.2}"));
             let _ = writeln!(
                 s,
-                "| {}{} | {} | {} | {} | {} | {} | {} | {q} | {h} |",
+                "| {}{} | {} | {} | {} | {} | {} | {} | {} | {q} | {h} |",
                 f.kind.name(),
                 match f.waviness {
                     Waviness::Gentle => "",
@@ -1290,6 +1303,7 @@ it is.\n\n\
                 f.n,
                 f.errors,
                 pct(f.with_finding, f.n - f.errors),
+                pct(f.all_qualified, f.with_finding),
                 pct(f.no_discrepancy, f.n - f.errors),
                 pct(f.with_outlier, f.n - f.errors),
                 top(&f.names, 5)
@@ -1342,8 +1356,9 @@ reading to the last — the finding's *change over the measured time*, or, where
 that drift findings of the parameter are one drift of neither form, their change together: the \
 drift's size whatever form it is found in; *named, form qualified*: of those named right, the \
 share whose naming finding the report qualifies — one effect with other findings of a form no \
-candidate has (a periodic error that is not a sine, a drift of neither form), or a periodic \
-error whose period and shape the positions do not determine — right for the open world's \
+candidate has (a periodic error that is not a sine, a drift of neither form), a periodic \
+error whose period and shape the positions do not determine, or one repeating fewer than six \
+times over the travel, which a smooth error of that shape fits as well — right for the open world's \
 effects, a caveat too many for a sine or a drift of the candidates' own form; *named alone, \
 explained*: of all datasets, those where the effect is named right, no finding names anything \
 else, and the verdict is that the causes found explain the data (residuals consistent with the \

@@ -2869,6 +2869,13 @@ fn harmonic_families(findings: &[Finding]) -> Vec<Compound> {
 /// fundamental's amplitude, and higher ones alias onto lower ones at the spacings of practice.
 const SHAPE_HARMONICS: usize = 4;
 
+/// Fewest repeats over the travel measured for a periodic finding along a linear axis to be told
+/// from a smooth component error ([`periodic_shapes`]): a ball screw's pitch or an encoder's
+/// period (5–40 mm) repeats a dozen times or more over common strokes, while the base's
+/// polynomial completion holds about one wave per π degrees (3–5 waves at degree 10–15), so a
+/// wave of fewer repeats may be either.
+const LONG_WAVE_PERIODS: f64 = 6.0;
+
 /// Periodic findings along a linear axis (free period, not in a family: `covered`) whose shape
 /// the data say is not a sine, or cannot say. Two cases, each said in one sentence:
 /// - the series of its harmonics 2..K at the finding's period (K = 2 to [`SHAPE_HARMONICS`],
@@ -2878,6 +2885,9 @@ const SHAPE_HARMONICS: usize = 4;
 ///   leaves a confident wrong shape when missed). A sawtooth seen at positions too few for its
 ///   harmonics to be found as causes of their own (each scanned over every period) comes out as
 ///   one sine whose period its harmonics' aliases may pull;
+/// - else, when it repeats fewer than [`LONG_WAVE_PERIODS`] times over the travel measured:
+///   a wave that long is also a smooth component error (a waviness the base's polynomial
+///   completion does not reach), which these data cannot tell from a periodic error;
 /// - else, when its period is one of several that fit about as well (`ambiguous`, by name) and
 ///   shorter than twice the mean step between the positions: there a sine of a free period fits
 ///   a periodic error of almost any period and shape, and the finding names the axis' periodic
@@ -2932,14 +2942,24 @@ fn periodic_shapes(
                 ),
                 _ => {
                     let (v, count, step) = position_step(obs, &[&c.term])?;
-                    if !(ambiguous.contains(name) && period < 2.0 * step) {
-                        return None;
-                    }
-                    format!(
+                    let travel = step * (count - 1) as f64;
+                    if period * LONG_WAVE_PERIODS > travel {
+                        format!(
+                            "{name} repeats only {:.1} times over the {} of {} measured: a wave that long is also a smooth positioning error of {} of that shape (a waviness of the screw or guideway, a thermal bow), and these data cannot tell a periodic error from it; a measurement over a longer travel, where a periodic error repeats and a smooth error does not, would",
+                            travel / period,
+                            Quantity::Distance.format_value(travel),
+                            v.name,
+                            v.name
+                        )
+                    } else if ambiguous.contains(name) && period < 2.0 * step {
+                        format!(
                         "{name} stands for a periodic error of {} whose period and shape these data do not determine: at {count} positions a mean step of {} apart, a sine of a period shorter than twice the step fits about as well at several periods, and so would a periodic error of another shape (a sawtooth, a stepped scale) seen through aliases; positions at a finer spacing would tell them apart",
                         v.name,
                         Quantity::Distance.format_value(step)
                     )
+                    } else {
+                        return None;
+                    }
                 }
             };
             Some(Compound {

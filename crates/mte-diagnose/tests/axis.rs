@@ -341,6 +341,21 @@ fn two_periodic_errors_of_one_axis_are_both_found() {
     assert!(d.findings.iter().any(|f| f.family == Family::Reversal));
     assert_ne!(names[0], names[1], "components named apart: {names:?}");
     assert!(d.held_out.as_ref().unwrap().diagnosed_rms * 1e3 < 1.1 * NOISE_UM);
+    // The wave repeats 5.3 times over the 800 mm travel: the report says that a smooth
+    // positioning error of that shape fits as well; the pitch (67 repeats) stands as found.
+    let qualified = |period: f64| {
+        let f = d.findings.iter().find(
+            |f| matches!(f.family, Family::Periodic { period: p } if (p - period).abs() < 2.0),
+        );
+        let name = &f.expect("found above").name;
+        d.compound
+            .iter()
+            .find(|c| c.findings.contains(name))
+            .map(|c| c.note.clone())
+    };
+    let note = qualified(150.0).expect("the long wave is qualified");
+    assert!(note.contains("repeats only 5.3 times"), "{note}");
+    assert_eq!(qualified(12.0), None);
 }
 
 /// A 5 mm ball-screw pitch error under ISO 230-2 targets about 20 mm apart: four times shorter
