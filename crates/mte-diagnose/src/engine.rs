@@ -1257,7 +1257,16 @@ impl Pool {
                 }
                 let kept = |t: &Term| !t.is_invisible() && t.columns.nrows() == n;
                 let variants = c.variants(obs);
-                let spread = c.spread().map(|(spread, bases)| {
+                // (A spread that does not match the variants one for one is not used: the
+                // products then come from the columns.)
+                let matches = |(spread, bases): &(std::sync::Arc<Spread>, Vec<DMat>)| {
+                    bases.len() == variants.len()
+                        && spread.rows() == n
+                        && bases.iter().zip(&variants).all(|(b, t)| {
+                            b.nrows() == spread.values().len() && b.ncols() == t.width()
+                        })
+                };
+                let spread = c.spread().filter(matches).map(|(spread, bases)| {
                     let kept: Vec<DMat> = bases
                         .into_iter()
                         .zip(&variants)
