@@ -30,6 +30,14 @@ fn scatter(d: &Diagnosis, sigma0: f64) -> String {
     }
 }
 
+/// The compound effect or qualification ([`crate::Diagnosis::compound`]) the finding `name` is
+/// part of.
+fn caveat_of<'d>(d: &'d Diagnosis, name: &str) -> Option<&'d crate::Compound> {
+    d.compound
+        .iter()
+        .find(|c| c.findings.iter().any(|f| f == name))
+}
+
 /// The readings the final model misses by far more than the rest, where they were taken, and
 /// what the fit is without them.
 fn outliers(s: &mut String, d: &Diagnosis) {
@@ -142,11 +150,21 @@ pub fn markdown(d: &Diagnosis, title: &str) -> String {
             );
         }
         Verdict::Explained => {
+            let qualified = d
+                .findings
+                .iter()
+                .filter(|f| caveat_of(d, &f.name).is_some())
+                .count();
             let _ = writeln!(
                 s,
-                "**The base model misses {} cause{}**, named below; with {} the residuals are {} ({}).\n",
+                "**The base model misses {} cause{}**, named below{}; with {} the residuals are {} ({}).\n",
                 d.findings.len(),
                 if d.findings.len() == 1 { "" } else { "s" },
+                match (qualified, d.findings.len()) {
+                    (0, _) => String::new(),
+                    (1, 1) => " with a caveat on what these data can tell".to_string(),
+                    (q, _) => format!(" ({q} with a caveat on what these data can tell)"),
+                },
                 if d.findings.len() == 1 { "it" } else { "them" },
                 if stated {
                     "consistent with the noise"
@@ -207,6 +225,15 @@ pub fn markdown(d: &Diagnosis, title: &str) -> String {
                     .unwrap_or_default()
             );
         }
+        // A caveat on several findings follows the last of them.
+        if let Some(c) = caveat_of(d, &f.name)
+            && d.findings
+                .iter()
+                .rfind(|g| c.findings.contains(&g.name))
+                .is_some_and(|g| g.name == f.name)
+        {
+            let _ = writeln!(s, "  Caveat: {}.", c.note);
+        }
     }
     if !d.findings.is_empty() {
         let _ = writeln!(s);
@@ -251,7 +278,12 @@ pub fn markdown(d: &Diagnosis, title: &str) -> String {
     if let Some(why) = &d.incomplete {
         let _ = writeln!(s, "**The diagnosis is incomplete:** {why}.\n");
     }
-    for note in &d.notes {
+    // (The compound effects' notes stand beside their findings.)
+    for note in d
+        .notes
+        .iter()
+        .filter(|n| !d.compound.iter().any(|c| &c.note == *n))
+    {
         let _ = writeln!(s, "Note: {note}.\n");
     }
     if !d.base_completed.is_empty() {

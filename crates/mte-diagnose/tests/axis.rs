@@ -356,6 +356,15 @@ fn two_periodic_errors_of_one_axis_are_both_found() {
     let note = qualified(150.0).expect("the long wave is qualified");
     assert!(note.contains("repeats only 5.3 times"), "{note}");
     assert_eq!(qualified(12.0), None);
+    // The report says so beside the finding, in the verdict, and not again among the notes.
+    let report = mte_diagnose::report::markdown(&d, "two periods");
+    let caveat = format!("  Caveat: {note}.");
+    assert_eq!(report.matches(&caveat).count(), 1, "{report}");
+    assert!(!report.contains(&format!("Note: {note}")), "{report}");
+    assert!(
+        report.contains("named below (1 with a caveat on what these data can tell)"),
+        "{report}"
+    );
 }
 
 /// A 5 mm ball-screw pitch error under ISO 230-2 targets about 20 mm apart: four times shorter
