@@ -401,20 +401,14 @@ impl Spread {
         assert_eq!(b.nrows(), self.values.len(), "one row per distinct value");
         let n = self.rows;
         let mut out = DMat::zeros(n, b.ncols());
-        for (j, bj) in b.column_iter().enumerate() {
-            let oj = out.column_mut(j);
-            let oj = oj.data.into_slice_mut();
-            for pose in 0..self.poses() {
-                let (group, weight) = (
-                    &self.group[pose * n..(pose + 1) * n],
-                    &self.weight[pose * n..(pose + 1) * n],
-                );
-                for (i, (&g, &w)) in group.iter().zip(weight).enumerate() {
-                    if pose == 0 {
-                        oj[i] = w * bj[g];
-                    } else {
-                        oj[i] += w * bj[g];
-                    }
+        for (bj, mut oj) in b.column_iter().zip(out.column_iter_mut()) {
+            for (group, weight) in self
+                .group
+                .chunks_exact(n.max(1))
+                .zip(self.weight.chunks_exact(n.max(1)))
+            {
+                for (o, (&g, &w)) in oj.iter_mut().zip(group.iter().zip(weight)) {
+                    *o += w * bj[g];
                 }
             }
         }
