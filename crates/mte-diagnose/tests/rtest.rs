@@ -293,6 +293,31 @@ fn default_base_has_the_orientation_location_errors() {
         .expect(&report);
     let e = &ea0b.estimates[0];
     assert!((e.value - alpha).abs() <= 2.0 * e.uncertainty, "{}", e.text);
+    // What the setups cannot separate from the location errors, with what would: a second
+    // ball position for none of them. The B line's shift along itself is the C line's place
+    // (nothing separates it), its turn about itself B's angular zero (an angle reference
+    // does), an absolute location the relative one read with C's (the same constant).
+    let entry = |name: &str| {
+        d.not_separable
+            .iter()
+            .find(|n| n.name == name)
+            .unwrap_or_else(|| panic!("{name} not listed: {:?}", d.not_separable))
+    };
+    assert_eq!(entry("EY0B").confounded_with, ["EY0C"]);
+    assert_eq!(entry("EY0B").separated_by, None);
+    let zero = entry("EB0B").separated_by.clone().unwrap_or_default();
+    assert!(zero.contains("B's own angle"), "{zero}");
+    let abs = entry("EX0B abs");
+    assert_eq!(abs.separated_by, None);
+    assert!(abs.confounded_with.contains(&"EX0B".to_string()), "{abs:?}");
+    assert!(
+        d.not_separable
+            .iter()
+            .filter_map(|n| n.separated_by.as_deref())
+            .all(|h| !h.contains("ball position")),
+        "{:?}",
+        d.not_separable
+    );
 }
 
 #[test]

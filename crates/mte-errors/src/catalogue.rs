@@ -225,6 +225,11 @@ pub struct SlotName {
 /// let s = slot_name(&m, m.slot_index_by_name("C.position.dx").unwrap());
 /// assert_eq!((s.name.as_str(), s.kind), ("EX0C", ParamKind::Location));
 /// assert_eq!(s.label, "location of the C axis line along x");
+/// // A line has no place along itself, and its turn about itself is the axis' zero.
+/// let along = slot_name(&m, m.slot_index_by_name("A.position.dx").unwrap());
+/// assert_eq!(along.label, "shift along the A axis line itself (x), of what A carries");
+/// let zero = slot_name(&m, m.slot_index_by_name("A.position.ex").unwrap());
+/// assert_eq!(zero.label, "zero of the A axis' angle (its line turned about itself)");
 /// ```
 pub fn slot_name(machine: &Machine, slot: usize) -> SlotName {
     let s = machine.error_slots()[slot];
@@ -241,7 +246,23 @@ pub fn slot_name(machine: &Machine, slot: usize) -> SlotName {
     match (s.kind, axis) {
         (SlotKind::Position, Some(a)) if a.kind == AxisKind::Rotary => {
             let an = &a.name;
-            let (label, meaning) = if c < 3 {
+            let along_own_line = principal(&a.direction) == Some(c % 3);
+            let (label, meaning) = if c < 3 && along_own_line {
+                // A line has no place along itself: this shift moves what the axis carries.
+                (
+                    format!("shift along the {an} axis line itself ({xyz}), of what {an} carries"),
+                    format!(
+                        "offset along {xyz}, the {an} axis line's own direction, of {an} and what it carries relative to its parent body `{parent_name}`: not a location error of the line (ISO 230-7 has none), the place of what {an} carries"
+                    ),
+                )
+            } else if along_own_line {
+                (
+                    format!("zero of the {an} axis' angle (its line turned about itself)"),
+                    format!(
+                        "angular zero of {an}: {an} and what it carries turned about {an}'s own line relative to its parent body `{parent_name}`"
+                    ),
+                )
+            } else if c < 3 {
                 (
                     format!("location of the {an} axis line along {xyz}"),
                     format!(

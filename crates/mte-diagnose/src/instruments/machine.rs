@@ -203,6 +203,21 @@ pub(crate) fn slot_effects(
             continue;
         }
         let mut name = slot_name(machine, j);
+        // What separates an error from the model is the instrument's to say, except for a
+        // rotary line's own direction, which no measurement of positions separates: a line has
+        // no place along itself (the shift is the place of what the axis carries), and its turn
+        // about itself is the axis' angular zero, which only a reference of that angle shows.
+        let own = axis_component(machine, j)
+            .filter(|_| slot.kind == SlotKind::Position)
+            .filter(|_| axis.is_some_and(|a| a.kind == AxisKind::Rotary));
+        let separated_by = match axis {
+            Some(a) if own == Some(c) => Some(format!(
+                "a reference of {an}'s own angle at its zero (a level, or a face of what {an} carries probed, at {an} = 0)",
+                an = a.name
+            )),
+            _ if own == Some(c + 3) => None,
+            _ => hint(&name),
+        };
         if against_tool {
             name.label = format!("{} (the line against the tool)", name.label);
             name.meaning = format!(
@@ -224,7 +239,7 @@ pub(crate) fn slot_effects(
                                 sq.column += at_ref.column;
                             }
                         }
-                        sq.separated_by = hint(&name);
+                        sq.separated_by = separated_by.clone();
                         out.push(sq);
                     }
                 }
@@ -266,14 +281,16 @@ pub(crate) fn slot_effects(
                         },
                         role: name.role.clone(),
                         column: col,
-                        separated_by: hint(&name),
+                        // As constants the two representations differ by the carried body's
+                        // own location errors: no data tell them apart.
+                        separated_by: None,
                         reference,
                     });
                 }
             }
         }
         out.push(SlotEffect {
-            separated_by: hint(&name),
+            separated_by,
             name: name.name,
             label: name.label,
             meaning: name.meaning,
