@@ -1198,8 +1198,16 @@ impl Candidate for Scan {
         (fp < f(self.grid[best])).then(|| self.term(p))
     }
 
+    /// The term at `value`; where the values stay on the grid (harmonics of a turn: a whole
+    /// number of cycles per turn) only at a grid value, the hyper-parameter being discrete (it
+    /// adds no uncertainty to the size).
     fn at(&self, _variant: usize, value: f64) -> Option<Term> {
-        Some(self.term(value))
+        let on_grid = || {
+            self.grid
+                .iter()
+                .any(|&g| (g - value).abs() <= 1e-9 * g.abs().max(value.abs()))
+        };
+        (self.refine_grid || on_grid()).then(|| self.term(value))
     }
 
     fn columns(&self, _obs: &Observations) -> usize {

@@ -834,19 +834,38 @@ fn conclude(
             meaning: c.term.meaning.clone(),
             family: c.term.family.clone(),
             estimates: extended_parameters[base.len() + k].estimates.clone(),
-            hyper_parameter: hyper_of(&c.term.family, exposed_by_rotary(obs, &c.term))
-                .zip(hyper_rows[k].map(|r| cov[(r, r)].sqrt()))
-                .map(|((v, q), u)| Estimate {
-                    name: if q == Quantity::Duration {
-                        "time constant".into()
+            hyper_parameter: hyper_of(&c.term.family, exposed_by_rotary(obs, &c.term)).and_then(
+                |(v, q)| {
+                    let name = if q == Quantity::Duration {
+                        "time constant"
                     } else {
-                        "period".into()
-                    },
-                    value: v,
-                    uncertainty: u,
-                    quantity: q,
-                    text: q.format(v, u),
-                }),
+                        "period"
+                    };
+                    let (uncertainty, text) = match hyper_rows[k] {
+                        Some(r) => {
+                            let u = cov[(r, r)].sqrt();
+                            (u, q.format(v, u))
+                        }
+                        // A harmonic of a turn: a whole number of cycles per turn, exactly.
+                        None if q == Quantity::AxisAngle => (
+                            0.0,
+                            format!(
+                                "{}: {} per turn",
+                                q.format_value(v),
+                                (std::f64::consts::TAU / v).round()
+                            ),
+                        ),
+                        None => return None,
+                    };
+                    Some(Estimate {
+                        name: name.into(),
+                        value: v,
+                        uncertainty,
+                        quantity: q,
+                        text,
+                    })
+                },
+            ),
             p_value: c.p_value,
             p_value_final: finals[k],
             cv_rms_before: c.cv_before,
@@ -994,12 +1013,22 @@ fn conclude(
     } else {
         Verdict::Explained
     };
-    let incomplete = search.hit_limit.then(|| {
+    let capped = search.capped.as_ref().map(|(name, p, most)| {
+        format!(
+            "{name} was still significant ({}) and improved the cross-validated RMS, but one error takes at most {most} periodic components in the search: more periods may remain (a base model with the axes' smooth errors, `components`, leaves the periods to what lies beyond them)",
+            crate::report::p_text(*p)
+        )
+    });
+    let limit = search.hit_limit.then(|| {
         format!(
             "the search stopped at its limit of {} effects while a further candidate was still significant and improved the cross-validated RMS; more causes may remain",
             params.max_effects
         )
     });
+    let incomplete = match (limit, capped) {
+        (Some(a), Some(b)) => Some(format!("{a}; and {b}")),
+        (a, b) => a.or(b),
+    };
     let mut notes = Vec::new();
     if !rests_on_orders.is_empty() {
         const NAMED: usize = 6;
@@ -1686,6 +1715,10 @@ struct SearchResult {
     detection_limits: Vec<DetectionLimit>,
     pruned: Vec<String>,
     hit_limit: bool,
+    /// A periodic cause that already had its most components ([`most_periodic_components`])
+    /// when the search stopped, yet a further one was significant and improved the
+    /// cross-validated RMS: its name, adjusted p-value and that number.
+    capped: Option<(String, f64, usize)>,
 }
 
 /// The search over candidates, on the observations whose weight is not zero.
@@ -1871,6 +1904,10 @@ impl Searcher<'_> {
         };
         let mut used = vec![false; entries];
         let mut times_chosen = vec![0usize; entries];
+        // Periodic causes at their most components: still tested, never added; one still
+        // significant when the search stops makes it incomplete.
+        let mut capped = vec![false; entries];
+        let mut capped_significant = None;
         let mut chosen: Vec<Chosen> = Vec::new();
         let mut steps = Vec::new();
         let mut not_separable = Vec::new();
@@ -2095,8 +2132,16 @@ impl Searcher<'_> {
             scored.sort_by(|a, b| a.2.total_cmp(&b.2).then(b.3.total_cmp(&a.3)));
             let mut ranking = Vec::new();
             let mut best: Option<(usize, usize, f64)> = None; // (entry, variant, cv rms)
+            let mut best_capped: Option<(String, f64, usize)> = None;
             // The held-out RMS of the significant ones (independent: in parallel).
-            let shortlisted = &scored[..scored.len().min(params.shortlist)];
+            // (A capped cause does not take an open one's place: the best of them beside.)
+            let shortlisted: Vec<Scored> = scored
+                .iter()
+                .filter(|s| !capped[s.0])
+                .take(params.shortlist)
+                .chain(scored.iter().find(|s| capped[s.0]))
+                .copied()
+                .collect();
             let cvs: Vec<Option<f64>> = shortlisted
                 .par_iter()
                 .map(|&(ci, vi, p, _)| {
@@ -2106,7 +2151,13 @@ impl Searcher<'_> {
                 .collect();
             for (&(ci, vi, p, share), cv) in shortlisted.iter().zip(cvs) {
                 let t = variant(&overrides, ci, vi);
-                if let Some(r) = cv {
+                if capped[ci] {
+                    if cv.is_some_and(|r| r < cv_rms * (1.0 - params.min_gain))
+                        && best_capped.is_none()
+                    {
+                        best_capped = Some((t.name.clone(), p, most_periodic_components(obs, &t)));
+                    }
+                } else if let Some(r) = cv {
                     let better = match best {
                         None => true,
                         Some((bc, bv, br)) => {
@@ -2133,6 +2184,7 @@ impl Searcher<'_> {
             }
             let accepted = best.filter(|(_, _, r)| *r < cv_rms * (1.0 - params.min_gain));
             let Some((ci, vi, new_cv)) = accepted else {
+                capped_significant = best_capped;
                 if explain {
                     detection_limits = self.limits_beyond_next_orders(
                         &sensitivity,
@@ -2193,8 +2245,8 @@ impl Searcher<'_> {
             // error. The period already in the model is no longer separable, so the next one is
             // another.
             times_chosen[ci] += 1;
-            let recurs = matches!(term.family, Family::Periodic { .. })
-                && times_chosen[ci] < MAX_PERIODIC_COMPONENTS;
+            let recurs = matches!(term.family, Family::Periodic { .. });
+            capped[ci] = recurs && times_chosen[ci] >= most_periodic_components(obs, &term);
             // (By the pool's name: a second component is named `… #2`.)
             let pool_name = &self.pool.variants[ci][0].name;
             for (cj, variants) in self.pool.variants.iter().enumerate() {
@@ -2251,6 +2303,7 @@ impl Searcher<'_> {
             detection_limits,
             pruned,
             hit_limit,
+            capped: capped_significant,
         }
     }
 
@@ -4115,8 +4168,23 @@ const COMPLETION_LEVEL: f64 = 0.01;
 /// still gets its hyper-parameter refined.
 const REFINE_LEVEL: f64 = 1e3;
 
-/// Periodic components one slot may show (pitch, a longer wave of the screw, a harmonic).
+/// Periodic components one error may show along a linear axis (pitch, a longer wave of the
+/// screw, a harmonic of the pitch).
 const MAX_PERIODIC_COMPONENTS: usize = 3;
+
+/// Periodic components one error may show along a rotary axis: its smooth part is harmonics of
+/// a turn too (eccentricity, an elliptic bearing or encoder: 1, 2, 3 per turn), beside a worm
+/// gear's tooth error and its harmonics.
+const MAX_ROTARY_PERIODIC_COMPONENTS: usize = 6;
+
+/// How many periodic components the search gives the error of periodic term `t`.
+fn most_periodic_components(obs: &Observations, t: &Term) -> usize {
+    if exposed_by_rotary(obs, t) {
+        MAX_ROTARY_PERIODIC_COMPONENTS
+    } else {
+        MAX_PERIODIC_COMPONENTS
+    }
+}
 
 /// `true` when the periodic term `t` of candidate `candidate` has a period within the Fourier
 /// resolution (1 / range of its axis; along a rotary axis, the same harmonic of a turn) of a
@@ -4351,13 +4419,18 @@ fn record_not_separable(
     if x.ncols() == 0 {
         return;
     }
+    let confounded = confounded_with(&t.columns.columns(0, 1).into_owned(), model, x, fit)
+        .pop()
+        .unwrap_or_default();
+    // An absolute location error that its relative form holds is that constant read another
+    // way: nothing separates them.
+    let representation = crate::instruments::relative_form(&t.name)
+        .is_some_and(|relative| confounded.iter().any(|c| c == relative));
     out.push(NotSeparable {
         name: t.name.clone(),
         label: t.label.clone(),
-        confounded_with: confounded_with(&t.columns.columns(0, 1).into_owned(), model, x, fit)
-            .pop()
-            .unwrap_or_default(),
-        separated_by: t.separated_by.clone(),
+        confounded_with: confounded,
+        separated_by: t.separated_by.clone().filter(|_| !representation),
         rests_on_orders: false,
     });
 }

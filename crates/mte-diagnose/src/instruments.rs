@@ -16,6 +16,7 @@ use crate::dataset::ManifestFile;
 use crate::model::{ObservationModel, Prepared, prepare};
 
 pub use axis::AxisRuns;
+pub(crate) use machine::relative_form;
 pub use points::Points;
 pub use rtest::RTest;
 pub use tracker::Tracker;

@@ -389,10 +389,11 @@ pub fn markdown(d: &Diagnosis, title: &str) -> String {
             } else {
                 ranked.join("; ")
             },
-            step.added
-                .as_ref()
-                .map(|a| format!("added **{a}**"))
-                .unwrap_or_else(|| "nothing significant: stop".into())
+            match (&step.added, &d.incomplete) {
+                (Some(a), _) => format!("added **{a}**"),
+                (None, Some(_)) if k + 1 == d.steps.len() => "stop at a limit (see above)".into(),
+                (None, _) => "nothing significant: stop".into(),
+            }
         );
     }
     s

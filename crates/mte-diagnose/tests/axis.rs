@@ -686,3 +686,144 @@ fn a_cause_at_its_stated_detection_limit_is_found_four_times_in_five() {
         );
     }
 }
+
+/// Five bidirectional runs over `targets` (°, or mm when `unit` is `um`), 6 s apart, with the
+/// deviation `f(position, direction ±1)` plus noise `sigma` (″ or µm); returns the manifest.
+fn write_runs(
+    name: &str,
+    axis: &str,
+    targets: &[f64],
+    sigma: f64,
+    seed: u64,
+    f: impl Fn(f64, f64) -> f64,
+) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("mte-diagnose-axis-{name}-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let noise = Normal::new(0.0, sigma).unwrap();
+    let rotary = axis == "C";
+    let (position, deviation, noise_key) = if rotary {
+        ("c_deg", "deviation_arcsec", "noise_arcsec")
+    } else {
+        ("x_mm", "deviation_um", "noise_um")
+    };
+    let mut csv = format!("run,direction,{position},t_s,{deviation}\n");
+    let mut t = 0.0;
+    for run in 1..=5 {
+        for sign in [1.0, -1.0] {
+            let order: Vec<f64> = if sign > 0.0 {
+                targets.to_vec()
+            } else {
+                targets.iter().rev().copied().collect()
+            };
+            for p in order {
+                let dev = f(p, sign) + noise.sample(&mut rng);
+                let d = if sign > 0.0 { "+" } else { "-" };
+                csv.push_str(&format!("{run},{d},{p:.3},{t:.0},{dev:.4}\n"));
+                t += 6.0;
+            }
+        }
+    }
+    std::fs::write(dir.join("runs.csv"), csv).unwrap();
+    let manifest = format!(
+        r#"{{"format": "mte-dataset/1", "kind": "axis", "axis": "{axis}", "{noise_key}": {sigma}, "data": "runs.csv"}}"#
+    );
+    std::fs::write(dir.join("manifest.json"), manifest).unwrap();
+    dir.join("manifest.json")
+}
+
+/// 40 targets about 9° apart, jittered by up to ±3° (ISO 230-2's irregular steps), from `seed`.
+fn irregular_turn(seed: u64) -> Vec<f64> {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    (0..40)
+        .map(|i| {
+            let jitter: f64 = rand::Rng::random_range(&mut rng, -3.0..3.0);
+            if i == 0 { 0.0 } else { i as f64 * 9.0 + jitter }
+        })
+        .collect()
+}
+
+#[test]
+fn a_rotary_tables_smooth_errors_and_its_worm_gear_are_whole_harmonics_of_a_turn() {
+    // A rotary table with no model of its own beyond a zero: eccentricity and the next two
+    // harmonics of a turn (its smooth angular positioning error, a few arcsec), a 36-tooth worm
+    // gear's 1.5″ and a reversal. Every harmonic is a whole number of cycles per turn, so its
+    // period is exact and adds nothing to its amplitude's uncertainty (a free period would let
+    // harmonic 1 take harmonic 2's place); and a rotary axis' error takes more than three
+    // periodic components: the worm gear is found after the smooth part.
+    let (smooth, tooth, reversal) = ([4.2, 2.2, -5.9], 1.5, 1.3);
+    let d = run(&write_runs(
+        "rotary-harmonics",
+        "C",
+        &irregular_turn(200),
+        0.6,
+        200,
+        |c, sign| {
+            let th = c.to_radians();
+            (0..3)
+                .map(|k| smooth[k] * ((k + 1) as f64 * th + 0.4 * k as f64 + 0.3).sin())
+                .sum::<f64>()
+                + tooth * (36.0 * th + 2.0).sin()
+                - 0.5 * sign * reversal
+        },
+    ));
+    let report = mte_diagnose::report::markdown(&d, "rotary harmonics");
+    assert!(d.incomplete.is_none() && d.findings.len() == 5, "{report}");
+    let arcsec = |rad: f64| rad.to_degrees() * 3600.0;
+    for (per_turn, amplitude) in [(1.0, 4.2), (2.0, 2.2), (3.0, 5.9), (36.0, tooth)] {
+        let f = d
+            .findings
+            .iter()
+            .find(|f| match f.family {
+                Family::Periodic { period } => {
+                    (std::f64::consts::TAU / period - per_turn).abs() < 1e-9
+                }
+                _ => false,
+            })
+            .unwrap_or_else(|| panic!("{per_turn} per turn not found: {report}"));
+        let h = f.hyper_parameter.as_ref().expect("its period");
+        assert!(
+            h.uncertainty == 0.0 && h.text.contains("per turn"),
+            "{}",
+            h.text
+        );
+        let a = &f.estimates[0];
+        assert!(
+            within(arcsec(a.value), arcsec(a.uncertainty), amplitude, 2.5),
+            "{per_turn} per turn: {} against {amplitude}″",
+            a.text
+        );
+    }
+}
+
+#[test]
+fn a_periodic_error_beyond_the_most_components_makes_the_diagnosis_incomplete() {
+    // Four waves of one linear axis' positioning (a screw's pitch and three longer waves), no
+    // model of the axis: one error takes three periodic components, and the fourth, still
+    // significant, is said to be left, not passed over in silence.
+    let waves = [(2.0, 13.0), (2.5, 47.0), (2.0, 91.0), (1.5, 173.0)];
+    let d = run(&write_runs(
+        "four-waves",
+        "X",
+        &dense_targets(),
+        NOISE_UM,
+        7,
+        |x, _| {
+            waves
+                .iter()
+                .enumerate()
+                .map(|(k, (a, p))| a * (std::f64::consts::TAU * x / p + k as f64).sin())
+                .sum()
+        },
+    ));
+    let report = mte_diagnose::report::markdown(&d, "four waves");
+    let why = d
+        .incomplete
+        .as_deref()
+        .unwrap_or_else(|| panic!("{report}"));
+    assert!(
+        why.contains("EXX periodic #4") && why.contains("at most 3 periodic components"),
+        "{why}"
+    );
+    assert!(report.contains("stop at a limit"), "{report}");
+}

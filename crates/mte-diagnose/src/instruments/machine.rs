@@ -265,7 +265,7 @@ pub(crate) fn slot_effects(
                         None => machine.bodies()[child].name.clone(),
                     };
                     out.push(SlotEffect {
-                        name: format!("{} abs", name.name),
+                        name: format!("{}{ABSOLUTE}", name.name),
                         label: format!(
                             "{} with the {carried} kept in place (absolute)",
                             name.label
@@ -281,9 +281,7 @@ pub(crate) fn slot_effects(
                         },
                         role: name.role.clone(),
                         column: col,
-                        // As constants the two representations differ by the carried body's
-                        // own location errors: no data tell them apart.
-                        separated_by: None,
+                        separated_by: separated_by.clone(),
                         reference,
                     });
                 }
@@ -317,6 +315,16 @@ pub(crate) struct ReferencePoses<'a> {
     pub axes: &'a [Vec<f64>],
     /// Its time, s (one per observation).
     pub time_s: &'a [f64],
+}
+
+/// The suffix of a location error's name in the absolute representation (`EX0B abs`).
+const ABSOLUTE: &str = " abs";
+
+/// The relative form of an absolute location error's name (`EX0B` of `EX0B abs`). As constants
+/// the two differ by the carried body's own location errors: where those and the relative form
+/// hold it, no measurement separates them.
+pub(crate) fn relative_form(name: &str) -> Option<&str> {
+    name.strip_suffix(ABSOLUTE)
 }
 
 /// The body after `body` on its kinematic branch that a location error of `body`'s line can
