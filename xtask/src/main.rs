@@ -1,7 +1,7 @@
 //! `cargo xtask reproduce [seed000|seed002|seed003|seed004|all] [--check]`,
 //! `cargo xtask reproduce seed003 --timing` (writes `docs/reproduction/seed003-timing.md`) and
 //! `cargo xtask bench [-- criterion args]` and
-//! `cargo xtask study [fdr|power|coverage|combined|openworld|all] [--n N] [--n-power M] [--seed S] [--kind axis|tracker|rtest|rtest-head|points] [--base-model omit] [--out FILE]`.
+//! `cargo xtask study [fdr|power|coverage|combined|openworld|all] [--n N] [--n-power M] [--seed S] [--kind axis|tracker|rtest|rtest-head|points|rotary] [--base-model omit] [--out FILE]`.
 //!
 //! The generators are in the library target (`xtask::reproduce`), so the staleness test in
 //! `tests/reproduction_up_to_date.rs` runs the very same code.
@@ -9,9 +9,9 @@
 use std::process::{Command, ExitCode};
 use xtask::reproduce::{self, Freshness, PAPERS};
 
-const USAGE: &str = "usage: cargo xtask <reproduce [seed000|seed002|seed003|seed004|all] [--check] | reproduce seed003 --timing | bench [-- criterion args] | bench-diagnose [--rows N] [--seed S] | study [fdr|power|coverage|combined|openworld|all] [--n N] [--n-power M] [--seed S] [--kind axis|tracker|rtest|rtest-head|points] [--base-model omit] [--out FILE]>";
+const USAGE: &str = "usage: cargo xtask <reproduce [seed000|seed002|seed003|seed004|all] [--check] | reproduce seed003 --timing | bench [-- criterion args] | bench-diagnose [--rows N] [--seed S] | study [fdr|power|coverage|combined|openworld|all] [--n N] [--n-power M] [--seed S] [--kind axis|tracker|rtest|rtest-head|points|rotary] [--base-model omit] [--out FILE]>";
 
-/// `cargo xtask realistic <axis|tracker|rtest|rtest-head|points> <seed> <dir> [--hidden EFFECT SIZE]
+/// `cargo xtask realistic <axis|tracker|rtest|rtest-head|points|rotary> <seed> <dir> [--hidden EFFECT SIZE]
 /// [--cycles N] [--targets N]`: writes one realistic dataset (every ordinary error) for trying
 /// `mte diagnose` or timing it; clean unless `--hidden` names a study effect (`pitch`,
 /// `sawtooth`, `risefall`, … in the unit of the studies' tables; its other parameters drawn
@@ -20,7 +20,7 @@ const USAGE: &str = "usage: cargo xtask <reproduce [seed000|seed002|seed003|seed
 /// 8 cycles, 400 targets). `points` writes 3-D points of a C table with a calibrated target
 /// (the bundled `fixtures/datasets/c-stage-points/` is seed 1).
 fn run_realistic(args: &[String]) -> Result<(), String> {
-    const USAGE: &str = "usage: cargo xtask realistic <axis|tracker|rtest|rtest-head|points> <seed> <dir> [--hidden EFFECT SIZE] [--cycles N] [--targets N]";
+    const USAGE: &str = "usage: cargo xtask realistic <axis|tracker|rtest|rtest-head|points|rotary> <seed> <dir> [--hidden EFFECT SIZE] [--cycles N] [--targets N]";
     let (positional, options) = args.split_at(args.len().min(3));
     let [kind, seed, dir] = positional else {
         return Err(USAGE.into());
@@ -64,17 +64,12 @@ fn run_realistic(args: &[String]) -> Result<(), String> {
         );
         return Ok(());
     }
-    let kind = match kind.as_str() {
-        "axis" => xtask::realistic::Kind::Axis,
-        "tracker" => xtask::realistic::Kind::Tracker,
-        "rtest" => xtask::realistic::Kind::Rtest,
-        "rtest-head" => xtask::realistic::Kind::RtestHead,
-        other => {
-            return Err(format!(
-                "kind `{other}`: expected axis, tracker, rtest, rtest-head or points"
-            ));
-        }
-    };
+    let kind = xtask::realistic::Kind::parse(kind).ok_or_else(|| {
+        format!(
+            "kind `{kind}`: expected {}",
+            xtask::realistic::Kind::names()
+        )
+    })?;
     let seed: u64 = seed.parse().map_err(|e| format!("seed `{seed}`: {e}"))?;
     let dir = std::path::Path::new(dir);
     std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
@@ -93,11 +88,19 @@ fn run_realistic(args: &[String]) -> Result<(), String> {
     for h in &hidden {
         println!("hidden: {h:?}");
     }
+    // (A rotary table's noise is an angle: `noise_um` holds mrad.)
+    let noise = if kind == xtask::realistic::Kind::Rotary {
+        format!(
+            "{:.2}″",
+            truth.noise_um * 1e-3 * 180.0 / std::f64::consts::PI * 3600.0
+        )
+    } else {
+        format!("{:.2} µm", truth.noise_um)
+    };
     println!(
-        "wrote {} ({} observations, noise {:.2} µm)",
+        "wrote {} ({} observations, noise {noise})",
         truth.manifest.display(),
         truth.n_observations,
-        truth.noise_um
     );
     Ok(())
 }
@@ -211,18 +214,10 @@ fn run_study(args: &[String]) -> Result<(), String> {
                     continue;
                 }
                 "--kind" => {
-                    kinds = match v.as_str() {
-                        "axis" => vec![Kind::Axis],
-                        "tracker" => vec![Kind::Tracker],
-                        "rtest" => vec![Kind::Rtest],
-                        "rtest-head" => vec![Kind::RtestHead],
-                        "points" => vec![Kind::Points],
-                        other => {
-                            return Err(format!(
-                                "--kind: `{other}` (axis|tracker|rtest|rtest-head|points)"
-                            ));
-                        }
-                    }
+                    kinds = vec![
+                        Kind::parse(&v)
+                            .ok_or_else(|| format!("--kind: `{v}` ({})", Kind::names()))?,
+                    ]
                 }
                 "--base-model" => {
                     base_model = match v.as_str() {

@@ -376,6 +376,9 @@ pub enum Effect {
     PivotDrift,
     /// [`Hidden::AngularPositioning`] of C, harmonic 1–4, µrad.
     AngularPositioning,
+    /// [`Hidden::AngularPositioning`] of C at 24–90 cycles per turn (a worm gear's tooth
+    /// error), µrad.
+    WormGear,
     /// [`Hidden::BTilt`], µrad.
     BTilt,
     /// [`Hidden::Sawtooth`] of X, period 20–80 mm, µm.
@@ -388,7 +391,7 @@ pub enum Effect {
 
 impl Effect {
     /// Every effect, in declaration order.
-    pub const ALL: [Effect; 11] = [
+    pub const ALL: [Effect; 12] = [
         Effect::Pitch,
         Effect::Reversal,
         Effect::ZeroDrift,
@@ -396,6 +399,7 @@ impl Effect {
         Effect::TrackerScale,
         Effect::PivotDrift,
         Effect::AngularPositioning,
+        Effect::WormGear,
         Effect::BTilt,
         Effect::Sawtooth,
         Effect::RiseFall,
@@ -419,6 +423,7 @@ impl Effect {
             Effect::TrackerScale => "tracker length scale",
             Effect::PivotDrift => "thermal drift of EX0B",
             Effect::AngularPositioning => "angular positioning of C (harmonic)",
+            Effect::WormGear => "worm-gear error of C (24–90 per turn)",
             Effect::BTilt => "B tilt EA0B",
             Effect::Sawtooth => "sawtooth positioning of X",
             Effect::RiseFall => "drift rising and falling",
@@ -455,6 +460,11 @@ impl Effect {
                 harmonic: rng.random_range(1..=4),
                 urad: size,
             },
+            Effect::WormGear => Hidden::AngularPositioning {
+                rotary: 1,
+                harmonic: rng.random_range(24..=90),
+                urad: size,
+            },
             Effect::BTilt => Hidden::BTilt { urad: sign * size },
             Effect::Sawtooth => Hidden::Sawtooth {
                 axis: 0,
@@ -473,7 +483,9 @@ impl Effect {
     pub fn unit(self) -> &'static str {
         match self {
             Effect::ZeroDrift => "µm/min",
-            Effect::Squareness | Effect::AngularPositioning | Effect::BTilt => "µrad",
+            Effect::Squareness | Effect::AngularPositioning | Effect::WormGear | Effect::BTilt => {
+                "µrad"
+            }
             Effect::TrackerScale => "ppm",
             _ => "µm",
         }
@@ -514,6 +526,7 @@ pub fn power_plan() -> Vec<(Kind, Effect, Vec<f64>)> {
             Effect::AngularPositioning,
             vec![5.0, 10.0, 20.0, 30.0],
         ),
+        (Kind::Rotary, Effect::WormGear, vec![1.0, 2.5, 5.0, 10.0]),
     ]
 }
 
@@ -525,6 +538,8 @@ pub fn coverage_plan() -> Vec<(Kind, Effect, f64)> {
         (Kind::Axis, Effect::ZeroDrift, 0.1),
         // A size whose power cell showed fewer than 95 % within 2 u (about a second each).
         (Kind::Rtest, Effect::PivotDrift, 10.0),
+        // A harmonic of a turn, whose period is exact (no period uncertainty in its size's).
+        (Kind::Rotary, Effect::WormGear, 5.0),
     ]
 }
 
@@ -546,8 +561,8 @@ pub fn openworld_plan() -> Vec<(Kind, Effect, f64)> {
 /// squareness → the ISO name or its equivalent in the other axis (`EC0Y` ≡ `EC0X`,
 /// `EA0Z` ≡ `EA0Y`, `EB0Z` ≡ `EB0X`); reversal → contains `reversal`; instrument scale →
 /// `tracker scale`; drift → contains `drift` (and the parameter's name where there is one, e.g.
-/// `EX0B … drift`), not a scale drift; angular positioning → contains `ECC`/`EBB` or the axis'
-/// name with `periodic`/`harmonic`; location → starts with the ISO name (`EA0B`, `EA0B abs`),
+/// `EX0B … drift`), not a scale drift; angular positioning → contains `ECC`/`EBB` (not a drift,
+/// reversal or scale of it) or the axis' name with `periodic`/`harmonic`; location → starts with the ISO name (`EA0B`, `EA0B abs`),
 /// not a drift of it;
 /// open-world effects are never named right.
 pub fn names_effect(effect: &TrueEffect, finding: &str) -> bool {
@@ -572,7 +587,10 @@ pub fn names_effect(effect: &TrueEffect, finding: &str) -> bool {
         }
         EffectKind::AngularPositioning => {
             let axis = &hint[1..2];
-            finding.contains(hint)
+            let other = ["drift", "reversal", "scale"]
+                .iter()
+                .any(|w| finding.contains(w));
+            (finding.contains(hint) && !other)
                 || (finding.contains(axis)
                     && (finding.contains("periodic") || finding.contains("harmonic")))
         }
@@ -1236,10 +1254,12 @@ location errors 5–40 µm and \
 3-D points: a C table with X, Y, Z stages, every component error of X, Y, Z, three squareness \
 errors, the C line's location errors and C's six error motions, measured from two unknown \
 instrument poses with a calibrated target at 12 angles of C and 5 × 4 × 3 positions of X, Y, \
-Z), \
+Z; `rotary`: ISO 230-2 runs of a C rotary table with an autocollimator and a polygon, its angular \
+positioning error a zero offset and a random function over a turn (harmonics 1–3 of random \
+size and phase) of 2–15″, at 24–48 irregularly spaced angles in 3–5 bidirectional runs), \
 and noise whose σ is drawn per dataset (interferometer 0.1–0.6 µm, tracker 0.2–1.0 µm, R-test \
-0.2–0.8 µm, 3-D points 0.5–2 µm; the manifest, or for R-test the `noise_um` passed to `load_with_noise`, states the true \
-σ rounded to 0.1 µm). Machines, strokes, programmes and instrument placement are drawn per dataset \
+0.2–0.8 µm, 3-D points 0.5–2 µm, rotary table 0.2–1.0″; the manifest, or for R-test the `noise_um` passed to `load_with_noise`, states the true \
+σ rounded to 0.1 µm or 0.1″). Machines, strokes, programmes and instrument placement are drawn per dataset \
 too. The truth is computed with the generator's own homogeneous transforms, not with \
 mte-kinematics or mte-rtest. Each dataset is diagnosed with `DiagnoseParams::default()`. \
 Base model written in the manifests (the user's model of a real machine, which has every \
@@ -1330,7 +1350,7 @@ One hidden effect on top of the ordinary errors. *any finding*: the diagnosis re
 something; *named right*: a finding names the effect (mapping: `xtask::studies::names_effect` — \
 periodic → `E<ax><ax> periodic`; squareness → `EC0Y`/`EC0X` …; reversal → `… reversal`; tracker \
 scale → `tracker scale`; drift → `… drift` naming the parameter, e.g. `EX0B … drift`; angular \
-positioning of C → `ECC …` or a C `periodic`/`harmonic` finding; B tilt → `EA0B …`); *else \
+positioning of C (a harmonic, a worm gear) → `ECC …` (not a drift, reversal or scale of it) or a C `periodic`/`harmonic` finding; B tilt → `EA0B …`); *else \
 reported as not separable*: no finding names it, but a finding's alternatives the data cannot tell \
 apart do, or — for the tracker's length scale, which the user's model with every axis' scale can \
 never separate from a common scale of X, Y and Z — the report's list of what is not separable \
@@ -1363,7 +1383,10 @@ effects, a caveat too many for a sine or a drift of the candidates' own form; *n
 explained*: of all datasets, those where the effect is named right, no finding names anything \
 else, and the verdict is that the causes found explain the data (residuals consistent with the \
 noise, no structure left) — what a user should see. Pitch periods \
-5–40 mm, pivot drift τ 600–3600 s, C harmonics 1–4 drawn per dataset.\n\n\
+5–40 mm, pivot drift τ 600–3600 s, C harmonics 1–4, a rotary table's worm gear 24–90 teeth \
+(cycles per turn) drawn per dataset; the rotary table's user model has its smooth angular \
+positioning error (harmonics up to the second, completed by the diagnosis as the data ask), \
+not the worm gear's.\n\n\
 "
         );
         power_table(&mut s, &r.power);

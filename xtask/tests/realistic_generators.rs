@@ -239,6 +239,50 @@ fn reversal_separates_the_directions_by_its_size() {
 }
 
 #[test]
+fn a_rotary_tables_worm_gear_is_its_harmonic_in_arcsec() {
+    // A perfect table with a 5 µrad error at 36 cycles per turn: every deviation (″) is on that
+    // sine of the commanded angle, of amplitude 5 µrad = 1.031″.
+    let dir = tmp("rotary-worm");
+    let truth = write_spec(
+        &perfect(
+            Kind::Rotary,
+            &[Hidden::AngularPositioning {
+                rotary: 1,
+                harmonic: 36,
+                urad: 5.0,
+            }],
+        ),
+        8,
+        &dir,
+    )
+    .unwrap();
+    assert_abs_diff_eq!(truth.effects[0].value, 5e-6, epsilon = 1e-12);
+    let rows = read_csv(&dir.join("runs.csv"));
+    let (mut ss, mut sc, mut cc, mut sy, mut cy) = (0.0, 0.0, 0.0, 0.0, 0.0);
+    for r in &rows {
+        let w = 36.0 * num(r, "c_deg").to_radians();
+        let y = num(r, "deviation_arcsec");
+        ss += w.sin() * w.sin();
+        sc += w.sin() * w.cos();
+        cc += w.cos() * w.cos();
+        sy += w.sin() * y;
+        cy += w.cos() * y;
+    }
+    let det = ss * cc - sc * sc;
+    let (s, c) = ((sy * cc - cy * sc) / det, (cy * ss - sy * sc) / det);
+    let arcsec = 5e-6_f64.to_degrees() * 3600.0;
+    assert_abs_diff_eq!((s * s + c * c).sqrt(), arcsec, epsilon = 1e-3);
+    for r in &rows {
+        let w = 36.0 * num(r, "c_deg").to_radians();
+        assert_abs_diff_eq!(
+            num(r, "deviation_arcsec"),
+            s * w.sin() + c * w.cos(),
+            epsilon = 1e-3
+        );
+    }
+}
+
+#[test]
 fn axis_pitch_is_a_sine_of_the_stated_amplitude_and_period() {
     let dir = tmp("axis-pitch");
     let (a, p) = (2.0, 17.0);
@@ -291,6 +335,11 @@ fn generators_are_deterministic_and_hide_the_truth() {
                 axis: 0,
                 amplitude_um: 2.0,
                 period_mm: 20.0,
+            }],
+            Kind::Rotary => vec![Hidden::AngularPositioning {
+                rotary: 1,
+                harmonic: 36,
+                urad: 5.0,
             }],
             Kind::Rtest | Kind::RtestHead => vec![Hidden::PivotDrift {
                 rotary: 0,
@@ -366,7 +415,9 @@ fn generators_are_deterministic_and_hide_the_truth() {
         let text = std::fs::read_to_string(&ta.manifest)
             .unwrap()
             .to_lowercase();
-        for word in ["pitch", "drift", "hidden", "sawtooth", "truth", "rise"] {
+        for word in [
+            "pitch", "drift", "hidden", "sawtooth", "truth", "rise", "worm", "tooth",
+        ] {
             assert!(!text.contains(word), "`{word}` in the manifest");
         }
     }

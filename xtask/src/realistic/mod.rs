@@ -21,6 +21,7 @@
 pub mod axis;
 pub mod geom;
 pub mod points;
+pub mod rotary;
 pub mod rtest;
 pub mod smooth;
 pub mod tracker;
@@ -47,19 +48,23 @@ pub enum Kind {
     /// 3-D points of a target on the spindle of a C-table machine with X, Y, Z stages
     /// (`mte-dataset/1`, `"kind": "points"`).
     Points,
+    /// Bidirectional ISO 230-2 runs of a rotary table C with an autocollimator and a polygon,
+    /// deviations in arcsec (`mte-dataset/1`, `"kind": "axis"`, `"axis": "C"`).
+    Rotary,
 }
 
 impl Kind {
     /// All kinds.
-    pub const ALL: [Kind; 5] = [
+    pub const ALL: [Kind; 6] = [
         Kind::Axis,
         Kind::Tracker,
         Kind::Rtest,
         Kind::RtestHead,
         Kind::Points,
+        Kind::Rotary,
     ];
 
-    /// Lower-case name (`axis`, `tracker`, `rtest`, `rtest-head`, `points`).
+    /// Lower-case name (`axis`, `tracker`, `rtest`, `rtest-head`, `points`, `rotary`).
     pub fn name(self) -> &'static str {
         match self {
             Kind::Axis => "axis",
@@ -67,7 +72,18 @@ impl Kind {
             Kind::Rtest => "rtest",
             Kind::RtestHead => "rtest-head",
             Kind::Points => "points",
+            Kind::Rotary => "rotary",
         }
+    }
+
+    /// The kind named `name` ([`Kind::name`]).
+    pub fn parse(name: &str) -> Option<Kind> {
+        Kind::ALL.into_iter().find(|k| k.name() == name)
+    }
+
+    /// Every kind's name, `|`-separated (for usage lines).
+    pub fn names() -> String {
+        Kind::ALL.map(Kind::name).join("|")
     }
 }
 
@@ -233,7 +249,8 @@ pub struct Truth {
     pub effects: Vec<TrueEffect>,
     /// The ordinary constant parameters (location and squareness errors), for reference.
     pub ordinary: Vec<TrueEffect>,
-    /// Standard deviation of the noise, µm.
+    /// Standard deviation of the noise, µm (of a rotary axis' angles, mrad: the readings' unit,
+    /// mm or rad, × 1000).
     pub noise_um: f64,
     /// Tracker: true station positions (workpiece frame, mm) and dead paths (mm).
     pub stations: Vec<([f64; 3], f64)>,
@@ -350,6 +367,7 @@ pub fn write_spec(spec: &Spec, seed: u64, dir: &Path) -> std::io::Result<Truth> 
         Kind::Tracker => tracker::write(spec, &mut rng, dir),
         Kind::Rtest | Kind::RtestHead => rtest::write(spec, &mut rng, dir),
         Kind::Points => points::write(spec, &mut rng, dir),
+        Kind::Rotary => rotary::write(spec, &mut rng, dir),
     }
 }
 
