@@ -780,17 +780,23 @@ impl BaseModelSpec {
         let rotary: Vec<Vec<Box<dyn Candidate>>> = rotary_axes
             .into_par_iter()
             .map(|(axis, hi, group)| {
-                let mut out: Vec<Box<dyn Candidate>> = Vec::new();
-                let mut after: Option<String> = None;
-                for h in hi + 1..=MAX_COMPONENT_HARMONIC {
+                // Harmonics `first..=last` of every error motion of the axis, as one term.
+                let harmonics = |first: usize, last: usize| -> Option<Term> {
                     let parts: Vec<(&SlotEffect, DMat)> = group
                         .iter()
-                        .filter_map(|s| component_columns(obs, s, h, h).map(|c| (*s, c)))
+                        .filter_map(|s| component_columns(obs, s, first, last).map(|c| (*s, c)))
                         .collect();
                     if parts.is_empty() {
-                        break;
+                        return None;
                     }
-                    let name = format!("{axis} H{h}");
+                    let (tag, which) = if first == last {
+                        (format!("H{first}"), format!("harmonic {first}"))
+                    } else {
+                        (
+                            format!("H{first}-{last}"),
+                            format!("harmonics {first} to {last}"),
+                        )
+                    };
                     let mut columns =
                         DMat::zeros(obs.len(), parts.iter().map(|(_, c)| c.ncols()).sum());
                     let mut at = 0;
@@ -798,15 +804,15 @@ impl BaseModelSpec {
                         columns.columns_mut(at, c.ncols()).copy_from(c);
                         at += c.ncols();
                     }
-                    let term = Term {
+                    Some(Term {
                         coefficients: parts
                             .iter()
                             .flat_map(|(s, c)| {
                                 (0..c.ncols())
-                                    .map(|k| (format!("{} H{h}[{k}]", s.name), s.quantity))
+                                    .map(|k| (format!("{} {tag}[{k}]", s.name), s.quantity))
                             })
                             .collect(),
-                        label: format!("error motions of {axis}, harmonic {h} of a turn"),
+                        label: format!("error motions of {axis}, {which} of a turn"),
                         meaning: format!(
                             "a higher harmonic of the error motions of {axis} ({}): the form of a \
                              bearing race or a wobble repeats every turn",
@@ -816,13 +822,33 @@ impl BaseModelSpec {
                                 .collect::<Vec<_>>()
                                 .join(", ")
                         ),
-                        name: name.clone(),
+                        name: format!("{axis} {tag}"),
                         family: Family::Base,
                         columns,
                         summary: Summary::EachCoefficient,
                         exposed_by: Some(axis.clone()),
                         separated_by: None,
+                    })
+                };
+                let mut out: Vec<Box<dyn Candidate>> = Vec::new();
+                // Every harmonic beyond the base's at once ([`Role::CompletionSpan`]): a form
+                // of several harmonics, none alone significant (a wavier race, an encoder's
+                // higher harmonics), would otherwise be left to the search as a cause.
+                if hi + 1 < MAX_COMPONENT_HARMONIC
+                    && let Some(term) = harmonics(hi + 1, MAX_COMPONENT_HARMONIC)
+                {
+                    out.push(Box::new(Completion {
+                        term,
+                        after: None,
+                        span: true,
+                    }));
+                }
+                let mut after: Option<String> = None;
+                for h in hi + 1..=MAX_COMPONENT_HARMONIC {
+                    let Some(term) = harmonics(h, h) else {
+                        break;
                     };
+                    let name = term.name.clone();
                     out.push(Box::new(Completion {
                         term,
                         after: after.replace(name),

@@ -827,3 +827,37 @@ fn a_periodic_error_beyond_the_most_components_makes_the_diagnosis_incomplete() 
     );
     assert!(report.contains("stop at a limit"), "{report}");
 }
+
+#[test]
+fn a_rotary_tables_smooth_error_of_many_harmonics_completes_the_model_and_names_nothing() {
+    // The user's model holds the table's angular positioning error up to the second harmonic
+    // of a turn; the table's error has a fifth too, and a third and fourth too small to show
+    // alone. Together the higher harmonics are significant: they complete the model (every
+    // harmonic beyond the base's at once), and no periodic cause is named for a smooth error.
+    let path = write_runs(
+        "rotary-smooth",
+        "C",
+        &irregular_turn(300),
+        0.5,
+        300,
+        |c, _| {
+            let th = c.to_radians();
+            4.0 * (th + 0.3).sin() - 2.5 * (2.0 * th).cos()
+                + 0.15 * (3.0 * th + 1.0).sin()
+                + 0.15 * (4.0 * th).cos()
+                + 0.5 * (5.0 * th + 2.0).sin()
+        },
+    );
+    let mut manifest: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
+    manifest["base_model"] = serde_json::json!({"components": {"degree": 3}});
+    std::fs::write(&path, manifest.to_string()).unwrap();
+    let d = run(&path);
+    let report = mte_diagnose::report::markdown(&d, "rotary smooth");
+    assert!(d.findings.is_empty() && d.no_discrepancy(), "{report}");
+    assert!(
+        d.base_completed.iter().any(|n| n.contains("-6")),
+        "{:?}",
+        d.base_completed
+    );
+}
