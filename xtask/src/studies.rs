@@ -1293,7 +1293,8 @@ none). *wavier ordinary errors*: the same kind with every ordinary error drawn w
 five waves of ⅕–2 strokes (instead of two or three of ½–2) and rotary error motions up to the \
 5th harmonic of a turn (instead of the 3rd), at the same sizes — smooth errors with more shape \
 than the user's cubic; the base's completions must hold them (on densely sampled axes up to \
-degree 15, and all their orders at once where no block of three alone is significant). Along an \
+degree 15, and all their orders at once where no block of three alone is significant; a rotary \
+axis' error motions up to the 6th harmonic, all at once where no single next one is). Along an \
 ISO 230-2 axis of 15–25 targets a wave of ⅕ stroke is three to five targets long, a shape no \
 polynomial the targets can carry holds: it is found as a periodic error of that length, which \
 it is, and the report says that these data cannot tell it from a smooth error of that shape \
