@@ -35,6 +35,23 @@ fn num(row: &BTreeMap<String, String>, key: &str) -> f64 {
     row[key].parse().unwrap()
 }
 
+type Row = BTreeMap<String, String>;
+
+/// Least squares `(s, c)` of `y ≈ s·sin(w) + c·cos(w)` over the rows.
+fn sine_fit(rows: &[Row], w: impl Fn(&Row) -> f64, y: impl Fn(&Row) -> f64) -> (f64, f64) {
+    let (mut ss, mut sc, mut cc, mut sy, mut cy) = (0.0, 0.0, 0.0, 0.0, 0.0);
+    for r in rows {
+        let (w, y) = (w(r), y(r));
+        ss += w.sin() * w.sin();
+        sc += w.sin() * w.cos();
+        cc += w.cos() * w.cos();
+        sy += w.sin() * y;
+        cy += w.cos() * y;
+    }
+    let det = ss * cc - sc * sc;
+    ((sy * cc - cy * sc) / det, (cy * ss - sy * sc) / det)
+}
+
 fn perfect(kind: Kind, hidden: &[Hidden]) -> Spec {
     let mut s = Spec::new(kind, hidden);
     s.ordinary_scale = 0.0;
@@ -258,22 +275,12 @@ fn a_rotary_tables_worm_gear_is_its_harmonic_in_arcsec() {
     .unwrap();
     assert_abs_diff_eq!(truth.effects[0].value, 5e-6, epsilon = 1e-12);
     let rows = read_csv(&dir.join("runs.csv"));
-    let (mut ss, mut sc, mut cc, mut sy, mut cy) = (0.0, 0.0, 0.0, 0.0, 0.0);
-    for r in &rows {
-        let w = 36.0 * num(r, "c_deg").to_radians();
-        let y = num(r, "deviation_arcsec");
-        ss += w.sin() * w.sin();
-        sc += w.sin() * w.cos();
-        cc += w.cos() * w.cos();
-        sy += w.sin() * y;
-        cy += w.cos() * y;
-    }
-    let det = ss * cc - sc * sc;
-    let (s, c) = ((sy * cc - cy * sc) / det, (cy * ss - sy * sc) / det);
+    let phase = |r: &Row| 36.0 * num(r, "c_deg").to_radians();
+    let (s, c) = sine_fit(&rows, phase, |r| num(r, "deviation_arcsec"));
     let arcsec = 5e-6_f64.to_degrees() * 3600.0;
     assert_abs_diff_eq!((s * s + c * c).sqrt(), arcsec, epsilon = 1e-3);
     for r in &rows {
-        let w = 36.0 * num(r, "c_deg").to_radians();
+        let w = phase(r);
         assert_abs_diff_eq!(
             num(r, "deviation_arcsec"),
             s * w.sin() + c * w.cos(),
@@ -302,22 +309,11 @@ fn axis_pitch_is_a_sine_of_the_stated_amplitude_and_period() {
     // dev = a·sin(2πx/p + φ) = s·sin(2πx/p) + c·cos(2πx/p): least squares for (s, c), then
     // every reading is on that sine and s² + c² = a².
     let rows = read_csv(&dir.join("runs.csv"));
-    let (mut ss, mut sc, mut cc, mut sy, mut cy) = (0.0, 0.0, 0.0, 0.0, 0.0);
-    for r in &rows {
-        let w = std::f64::consts::TAU * num(r, "x_mm") / p;
-        let y = num(r, "deviation_um");
-        ss += w.sin() * w.sin();
-        sc += w.sin() * w.cos();
-        cc += w.cos() * w.cos();
-        sy += w.sin() * y;
-        cy += w.cos() * y;
-    }
-    let det = ss * cc - sc * sc;
-    let s = (sy * cc - cy * sc) / det;
-    let c = (cy * ss - sy * sc) / det;
+    let phase = |r: &Row| std::f64::consts::TAU * num(r, "x_mm") / p;
+    let (s, c) = sine_fit(&rows, phase, |r| num(r, "deviation_um"));
     assert_abs_diff_eq!((s * s + c * c).sqrt(), a, epsilon = 1e-3);
     for r in &rows {
-        let w = std::f64::consts::TAU * num(r, "x_mm") / p;
+        let w = phase(r);
         assert_abs_diff_eq!(
             num(r, "deviation_um"),
             s * w.sin() + c * w.cos(),

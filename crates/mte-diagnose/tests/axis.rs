@@ -43,49 +43,25 @@ fn write_dataset(name: &str, hidden: Hidden, seed: u64) -> PathBuf {
 }
 
 fn write_dataset_at(name: &str, targets: &[f64], hidden: Hidden, seed: u64) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("mte-diagnose-axis-{name}-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let mut rng = ChaCha8Rng::seed_from_u64(seed);
-    let noise = Normal::new(0.0, NOISE_UM).unwrap();
-    let mut csv = String::from("run,direction,x_mm,t_s,deviation_um\n");
-    let mut t = 0.0;
-    let mut written = 0;
-    for run in 1..=5 {
-        for dir in [1.0, -1.0] {
-            let order: Vec<f64> = if dir > 0.0 {
-                targets.to_vec()
-            } else {
-                targets.iter().rev().copied().collect()
-            };
-            for x in order {
-                let dev = 2.0
-                    + hidden.reversal_um * 0.5 * dir
-                    + hidden.pitch_amplitude_um
-                        * (std::f64::consts::TAU * x / hidden.pitch_period_mm.max(1.0) + 0.7).sin()
-                    + hidden.wave_amplitude_um
-                        * (std::f64::consts::TAU * x / hidden.wave_period_mm.max(1.0) - 1.1).sin()
-                    + hidden.scale_ppm * 1e-3 * x
-                    + hidden.zero_drift_um_per_min * t / 60.0
-                    + hidden.zero_settling_um
-                        * (1.0 - (-t / hidden.zero_settling_tau_s.max(1.0)).exp())
-                    + noise.sample(&mut rng)
-                    + hidden.spike.filter(|s| s.0 == written).map_or(0.0, |s| s.1);
-                written += 1;
-                csv.push_str(&format!(
-                    "{run},{},{x:.3},{t:.1},{dev:.4}\n",
-                    if dir > 0.0 { "+" } else { "-" }
-                ));
-                t += 4.0;
-            }
-        }
-    }
-    std::fs::write(dir.join("runs.csv"), csv).unwrap();
-    let manifest = format!(
-        r#"{{"format": "mte-dataset/1", "kind": "axis", "axis": "X", "noise_um": {NOISE_UM}, "data": "runs.csv"}}"#
-    );
-    let path = dir.join("manifest.json");
-    std::fs::write(&path, manifest).unwrap();
-    path
+    write_runs(
+        name,
+        "X",
+        targets,
+        NOISE_UM,
+        seed,
+        4.0,
+        |x, dir, t, index| {
+            2.0 + hidden.reversal_um * 0.5 * dir
+                + hidden.pitch_amplitude_um
+                    * (std::f64::consts::TAU * x / hidden.pitch_period_mm.max(1.0) + 0.7).sin()
+                + hidden.wave_amplitude_um
+                    * (std::f64::consts::TAU * x / hidden.wave_period_mm.max(1.0) - 1.1).sin()
+                + hidden.scale_ppm * 1e-3 * x
+                + hidden.zero_drift_um_per_min * t / 60.0
+                + hidden.zero_settling_um * (1.0 - (-t / hidden.zero_settling_tau_s.max(1.0)).exp())
+                + hidden.spike.filter(|s| s.0 == index).map_or(0.0, |s| s.1)
+        },
+    )
 }
 
 fn run(path: &std::path::Path) -> mte_diagnose::Diagnosis {
@@ -687,15 +663,17 @@ fn a_cause_at_its_stated_detection_limit_is_found_four_times_in_five() {
     }
 }
 
-/// Five bidirectional runs over `targets` (°, or mm when `unit` is `um`), 6 s apart, with the
-/// deviation `f(position, direction ±1)` plus noise `sigma` (″ or µm); returns the manifest.
+/// Five bidirectional runs of `axis` (`C`: a rotary table, ° and ″; else mm and µm) over
+/// `targets`, readings `dt` s apart, with the deviation `f(position, direction ±1, time, index
+/// of the reading)` plus noise `sigma`; returns the manifest.
 fn write_runs(
     name: &str,
     axis: &str,
     targets: &[f64],
     sigma: f64,
     seed: u64,
-    f: impl Fn(f64, f64) -> f64,
+    dt: f64,
+    f: impl Fn(f64, f64, f64, usize) -> f64,
 ) -> PathBuf {
     let dir = std::env::temp_dir().join(format!("mte-diagnose-axis-{name}-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
@@ -708,7 +686,7 @@ fn write_runs(
         ("x_mm", "deviation_um", "noise_um")
     };
     let mut csv = format!("run,direction,{position},t_s,{deviation}\n");
-    let mut t = 0.0;
+    let (mut t, mut written) = (0.0, 0);
     for run in 1..=5 {
         for sign in [1.0, -1.0] {
             let order: Vec<f64> = if sign > 0.0 {
@@ -717,10 +695,11 @@ fn write_runs(
                 targets.iter().rev().copied().collect()
             };
             for p in order {
-                let dev = f(p, sign) + noise.sample(&mut rng);
+                let dev = f(p, sign, t, written) + noise.sample(&mut rng);
                 let d = if sign > 0.0 { "+" } else { "-" };
-                csv.push_str(&format!("{run},{d},{p:.3},{t:.0},{dev:.4}\n"));
-                t += 6.0;
+                csv.push_str(&format!("{run},{d},{p:.3},{t:.1},{dev:.4}\n"));
+                written += 1;
+                t += dt;
             }
         }
     }
@@ -758,7 +737,8 @@ fn a_rotary_tables_smooth_errors_and_its_worm_gear_are_whole_harmonics_of_a_turn
         &irregular_turn(200),
         0.6,
         200,
-        |c, sign| {
+        6.0,
+        |c, sign, _, _| {
             let th = c.to_radians();
             (0..3)
                 .map(|k| smooth[k] * ((k + 1) as f64 * th + 0.4 * k as f64 + 0.3).sin())
@@ -808,7 +788,8 @@ fn a_periodic_error_beyond_the_most_components_makes_the_diagnosis_incomplete() 
         &dense_targets(),
         NOISE_UM,
         7,
-        |x, _| {
+        6.0,
+        |x, _, _, _| {
             waves
                 .iter()
                 .enumerate()
@@ -840,7 +821,8 @@ fn a_rotary_tables_smooth_error_of_many_harmonics_completes_the_model_and_names_
         &irregular_turn(300),
         0.5,
         300,
-        |c, _| {
+        6.0,
+        |c, _, _, _| {
             let th = c.to_radians();
             4.0 * (th + 0.3).sin() - 2.5 * (2.0 * th).cos()
                 + 0.15 * (3.0 * th + 1.0).sin()

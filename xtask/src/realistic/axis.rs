@@ -35,6 +35,21 @@ pub fn irregular_targets(rng: &mut impl Rng, stroke: f64, n: usize) -> Vec<f64> 
         .collect()
 }
 
+/// The sweeps of `runs` bidirectional runs over `targets`: each run's forward sweep over the
+/// targets in order, then its backward sweep in reverse, as (run from 1, direction ±1, targets).
+pub(crate) fn sweeps(targets: &[f64], runs: usize) -> impl Iterator<Item = (usize, f64, Vec<f64>)> {
+    (1..=runs).flat_map(move |run| {
+        [1.0, -1.0].map(|sign| {
+            let order = if sign > 0.0 {
+                targets.to_vec()
+            } else {
+                targets.iter().rev().copied().collect()
+            };
+            (run, sign, order)
+        })
+    })
+}
+
 /// A hidden effect as a function of (x mm, direction ±1, t s), µm.
 type Part = Box<dyn Fn(f64, f64, f64) -> f64>;
 
@@ -187,33 +202,26 @@ pub(crate) fn write(spec: &Spec, rng: &mut ChaCha8Rng, dir: &Path) -> std::io::R
     let mut csv = String::from("run,direction,x_mm,t_s,deviation_um\n");
     let mut t = 0.0;
     let mut n_obs = 0;
-    for run in 1..=runs {
-        for sign in [1.0, -1.0] {
-            let order: Vec<f64> = if sign > 0.0 {
-                targets.clone()
-            } else {
-                targets.iter().rev().copied().collect()
-            };
-            for x in order {
-                let mut dev = zero_um + positioning.at(x) + 0.5 * reversal_um * sign;
-                for p in &parts {
-                    dev += p(x, sign, t);
-                }
-                if sigma > 0.0 {
-                    dev += noise.sample(rng);
-                }
-                let _ = writeln!(
-                    csv,
-                    "{run},{},{x:.3},{:.*},{dev:.4}",
-                    if sign > 0.0 { "+" } else { "-" },
-                    if spec.log.is_some() { 2 } else { 1 },
-                    t,
-                );
-                n_obs += 1;
-                t += dt;
+    for (run, sign, order) in sweeps(&targets, runs) {
+        for x in order {
+            let mut dev = zero_um + positioning.at(x) + 0.5 * reversal_um * sign;
+            for p in &parts {
+                dev += p(x, sign, t);
             }
-            t += pause;
+            if sigma > 0.0 {
+                dev += noise.sample(rng);
+            }
+            let _ = writeln!(
+                csv,
+                "{run},{},{x:.3},{:.*},{dev:.4}",
+                if sign > 0.0 { "+" } else { "-" },
+                if spec.log.is_some() { 2 } else { 1 },
+                t,
+            );
+            n_obs += 1;
+            t += dt;
         }
+        t += pause;
     }
     std::fs::write(dir.join("runs.csv"), csv)?;
     let manifest = serde_json::json!({

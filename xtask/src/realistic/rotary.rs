@@ -70,33 +70,26 @@ pub(crate) fn write(spec: &Spec, rng: &mut ChaCha8Rng, dir: &Path) -> std::io::R
     let mut csv = String::from("run,direction,c_deg,t_s,deviation_arcsec\n");
     let mut t = 0.0;
     let mut n_obs = 0;
-    for run in 1..=runs {
-        for sign in [1.0, -1.0] {
-            let order: Vec<f64> = if sign > 0.0 {
-                targets.clone()
-            } else {
-                targets.iter().rev().copied().collect()
-            };
-            for c in order {
-                let theta = c.to_radians();
-                let mut dev = zero + positioning.at(theta);
-                for &(amp, k, phase) in &harmonics {
-                    dev += amp * (k * theta + phase).sin();
-                }
-                let mut dev = dev * ARCSEC;
-                if sigma_arcsec > 0.0 {
-                    dev += noise.sample(rng);
-                }
-                let _ = writeln!(
-                    csv,
-                    "{run},{},{c:.3},{t:.1},{dev:.4}",
-                    if sign > 0.0 { "+" } else { "-" },
-                );
-                n_obs += 1;
-                t += dt;
+    for (run, sign, order) in super::axis::sweeps(&targets, runs) {
+        for c in order {
+            let theta = c.to_radians();
+            let mut dev = zero + positioning.at(theta);
+            for &(amp, k, phase) in &harmonics {
+                dev += amp * (k * theta + phase).sin();
             }
-            t += pause;
+            let mut dev = dev * ARCSEC;
+            if sigma_arcsec > 0.0 {
+                dev += noise.sample(rng);
+            }
+            let _ = writeln!(
+                csv,
+                "{run},{},{c:.3},{t:.1},{dev:.4}",
+                if sign > 0.0 { "+" } else { "-" },
+            );
+            n_obs += 1;
+            t += dt;
         }
+        t += pause;
     }
     std::fs::write(dir.join("runs.csv"), csv)?;
     let manifest = serde_json::json!({
