@@ -37,8 +37,9 @@ fn num(row: &BTreeMap<String, String>, key: &str) -> f64 {
 
 type Row = BTreeMap<String, String>;
 
-/// Least squares `(s, c)` of `y ≈ s·sin(w) + c·cos(w)` over the rows.
-fn sine_fit(rows: &[Row], w: impl Fn(&Row) -> f64, y: impl Fn(&Row) -> f64) -> (f64, f64) {
+/// Every row's `y` is on one sine of its phase `w`, of amplitude `amplitude`: least squares for
+/// `y ≈ s·sin(w) + c·cos(w)`, then `s² + c² = amplitude²` and each reading on it.
+fn assert_on_sine(rows: &[Row], w: impl Fn(&Row) -> f64, y: impl Fn(&Row) -> f64, amplitude: f64) {
     let (mut ss, mut sc, mut cc, mut sy, mut cy) = (0.0, 0.0, 0.0, 0.0, 0.0);
     for r in rows {
         let (w, y) = (w(r), y(r));
@@ -49,7 +50,12 @@ fn sine_fit(rows: &[Row], w: impl Fn(&Row) -> f64, y: impl Fn(&Row) -> f64) -> (
         cy += w.cos() * y;
     }
     let det = ss * cc - sc * sc;
-    ((sy * cc - cy * sc) / det, (cy * ss - sy * sc) / det)
+    let (s, c) = ((sy * cc - cy * sc) / det, (cy * ss - sy * sc) / det);
+    assert_abs_diff_eq!((s * s + c * c).sqrt(), amplitude, epsilon = 1e-3);
+    for r in rows {
+        let w = w(r);
+        assert_abs_diff_eq!(y(r), s * w.sin() + c * w.cos(), epsilon = 1e-3);
+    }
 }
 
 fn perfect(kind: Kind, hidden: &[Hidden]) -> Spec {
@@ -275,18 +281,12 @@ fn a_rotary_tables_worm_gear_is_its_harmonic_in_arcsec() {
     .unwrap();
     assert_abs_diff_eq!(truth.effects[0].value, 5e-6, epsilon = 1e-12);
     let rows = read_csv(&dir.join("runs.csv"));
-    let phase = |r: &Row| 36.0 * num(r, "c_deg").to_radians();
-    let (s, c) = sine_fit(&rows, phase, |r| num(r, "deviation_arcsec"));
-    let arcsec = 5e-6_f64.to_degrees() * 3600.0;
-    assert_abs_diff_eq!((s * s + c * c).sqrt(), arcsec, epsilon = 1e-3);
-    for r in &rows {
-        let w = phase(r);
-        assert_abs_diff_eq!(
-            num(r, "deviation_arcsec"),
-            s * w.sin() + c * w.cos(),
-            epsilon = 1e-3
-        );
-    }
+    assert_on_sine(
+        &rows,
+        |r| 36.0 * num(r, "c_deg").to_radians(),
+        |r| num(r, "deviation_arcsec"),
+        5e-6_f64.to_degrees() * 3600.0,
+    );
 }
 
 #[test]
@@ -306,20 +306,14 @@ fn axis_pitch_is_a_sine_of_the_stated_amplitude_and_period() {
         &dir,
     )
     .unwrap();
-    // dev = a·sin(2πx/p + φ) = s·sin(2πx/p) + c·cos(2πx/p): least squares for (s, c), then
-    // every reading is on that sine and s² + c² = a².
+    // dev = a·sin(2πx/p + φ): every reading on that sine of the position.
     let rows = read_csv(&dir.join("runs.csv"));
-    let phase = |r: &Row| std::f64::consts::TAU * num(r, "x_mm") / p;
-    let (s, c) = sine_fit(&rows, phase, |r| num(r, "deviation_um"));
-    assert_abs_diff_eq!((s * s + c * c).sqrt(), a, epsilon = 1e-3);
-    for r in &rows {
-        let w = phase(r);
-        assert_abs_diff_eq!(
-            num(r, "deviation_um"),
-            s * w.sin() + c * w.cos(),
-            epsilon = 1e-3
-        );
-    }
+    assert_on_sine(
+        &rows,
+        |r| std::f64::consts::TAU * num(r, "x_mm") / p,
+        |r| num(r, "deviation_um"),
+        a,
+    );
 }
 
 #[test]
