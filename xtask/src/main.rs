@@ -90,10 +90,7 @@ fn run_realistic(args: &[String]) -> Result<(), String> {
     }
     // (A rotary table's noise is an angle: `noise_um` holds mrad.)
     let noise = if kind == xtask::realistic::Kind::Rotary {
-        format!(
-            "{:.2}″",
-            truth.noise_um * 1e-3 * 180.0 / std::f64::consts::PI * 3600.0
-        )
+        format!("{:.2}″", (truth.noise_um * 1e-3).to_degrees() * 3600.0)
     } else {
         format!("{:.2} µm", truth.noise_um)
     };

@@ -18,7 +18,7 @@ use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 
 use crate::realistic::{
-    BaseModel, EffectKind, Hidden, Kind, Spec, TrueEffect, axis::stated_noise_um, smooth::Waviness,
+    BaseModel, EffectKind, Hidden, Kind, Spec, TrueEffect, axis::stated_noise, smooth::Waviness,
     write_spec,
 };
 
@@ -124,7 +124,7 @@ pub fn run_one(spec: &Spec, index: usize, seed: u64, work: &Path) -> Record {
         }
     };
     let prepared = if matches!(spec.kind, Kind::Rtest | Kind::RtestHead) {
-        mte_diagnose::load_with_noise(&truth.manifest, Some(stated_noise_um(truth.noise_um)))
+        mte_diagnose::load_with_noise(&truth.manifest, Some(stated_noise(truth.noise_um)))
     } else {
         mte_diagnose::load(&truth.manifest)
     };

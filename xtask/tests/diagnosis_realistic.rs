@@ -404,7 +404,7 @@ fn wavier_ordinary_errors_on_a_tracker_are_completed_not_named() {
 }
 
 #[test]
-fn a_rotary_tables_worm_gear_is_named_and_sized_and_clean_tables_give_nothing() {
+fn a_rotary_tables_worm_gear_is_named_and_sized_and_clean_tables_rarely_give_a_finding() {
     // ISO 230-2 runs of a C rotary table (arcsec) whose smooth angular positioning error — a
     // random function over a turn — the user's model holds up to the second harmonic: on clean
     // tables the diagnosis completes it and names nothing; a worm gear's tooth error of 5 µrad

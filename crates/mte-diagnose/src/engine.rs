@@ -2152,9 +2152,8 @@ impl Searcher<'_> {
             for (&(ci, vi, p, share), cv) in shortlisted.iter().zip(cvs) {
                 let t = variant(&overrides, ci, vi);
                 if capped[ci] {
-                    if cv.is_some_and(|r| r < cv_rms * (1.0 - params.min_gain))
-                        && best_capped.is_none()
-                    {
+                    // (The shortlist's one capped cause.)
+                    if cv.is_some_and(|r| r < cv_rms * (1.0 - params.min_gain)) {
                         best_capped = Some((t.name.clone(), p, most_periodic_components(obs, &t)));
                     }
                 } else if let Some(r) = cv {

@@ -14,8 +14,9 @@ use super::{
     EffectKind, Hidden, Kind, Spec, TrueEffect, Truth, sawtooth, unsupported, write_manifest,
 };
 
-/// The stated noise a user writes: the true σ rounded to 0.1 µm (at least 0.1 µm).
-pub fn stated_noise_um(sigma_um: f64) -> f64 {
+/// The stated noise a user writes: the true σ rounded to 0.1 µm (at least 0.1 µm; for a rotary
+/// table the same in arcsec).
+pub fn stated_noise(sigma_um: f64) -> f64 {
     ((sigma_um * 10.0).round() / 10.0).max(0.1)
 }
 
@@ -35,19 +36,59 @@ pub fn irregular_targets(rng: &mut impl Rng, stroke: f64, n: usize) -> Vec<f64> 
         .collect()
 }
 
-/// The sweeps of `runs` bidirectional runs over `targets`: each run's forward sweep over the
-/// targets in order, then its backward sweep in reverse, as (run from 1, direction ±1, targets).
-pub(crate) fn sweeps(targets: &[f64], runs: usize) -> impl Iterator<Item = (usize, f64, Vec<f64>)> {
-    (1..=runs).flat_map(move |run| {
-        [1.0, -1.0].map(|sign| {
-            let order = if sign > 0.0 {
-                targets.to_vec()
-            } else {
-                targets.iter().rev().copied().collect()
-            };
-            (run, sign, order)
-        })
-    })
+/// A programme of bidirectional runs (ISO 230-2): `runs` runs over `targets`, each a forward
+/// sweep over the targets in order and a backward one in reverse, readings `dt` s apart and a
+/// `pause` after each sweep.
+pub(crate) struct Programme<'a> {
+    pub targets: &'a [f64],
+    pub runs: usize,
+    pub dt: f64,
+    pub pause: f64,
+}
+
+impl Programme<'_> {
+    /// Writes `dir/runs.csv` (columns `run,direction,<position>,t_s,<deviation>`, the time with
+    /// `time_decimals`): at each reading the deviation `f(position, direction ±1, t)` plus noise
+    /// of σ `sigma` drawn from `rng` (none at σ = 0). Returns the number of readings.
+    pub(crate) fn write(
+        &self,
+        dir: &Path,
+        (position, deviation): (&str, &str),
+        time_decimals: usize,
+        sigma: f64,
+        rng: &mut ChaCha8Rng,
+        f: impl Fn(f64, f64, f64) -> f64,
+    ) -> std::io::Result<usize> {
+        let noise = Normal::new(0.0, sigma.max(1e-300)).expect("finite σ");
+        let mut csv = format!("run,direction,{position},t_s,{deviation}\n");
+        let (mut t, mut count) = (0.0, 0);
+        for run in 1..=self.runs {
+            for sign in [1.0, -1.0] {
+                let order: Vec<f64> = if sign > 0.0 {
+                    self.targets.to_vec()
+                } else {
+                    self.targets.iter().rev().copied().collect()
+                };
+                for x in order {
+                    let mut dev = f(x, sign, t);
+                    if sigma > 0.0 {
+                        dev += noise.sample(rng);
+                    }
+                    let _ = writeln!(
+                        csv,
+                        "{run},{},{x:.3},{t:.*},{dev:.4}",
+                        if sign > 0.0 { "+" } else { "-" },
+                        time_decimals,
+                    );
+                    count += 1;
+                    t += self.dt;
+                }
+                t += self.pause;
+            }
+        }
+        std::fs::write(dir.join("runs.csv"), csv)?;
+        Ok(count)
+    }
 }
 
 /// A hidden effect as a function of (x mm, direction ±1, t s), µm.
@@ -198,38 +239,33 @@ pub(crate) fn write(spec: &Spec, rng: &mut ChaCha8Rng, dir: &Path) -> std::io::R
         }
     }
 
-    let noise = Normal::new(0.0, sigma.max(1e-300)).expect("finite σ");
-    let mut csv = String::from("run,direction,x_mm,t_s,deviation_um\n");
-    let mut t = 0.0;
-    let mut n_obs = 0;
-    for (run, sign, order) in sweeps(&targets, runs) {
-        for x in order {
+    let programme = Programme {
+        targets: &targets,
+        runs,
+        dt,
+        pause,
+    };
+    let time_decimals = if spec.log.is_some() { 2 } else { 1 };
+    let n_obs = programme.write(
+        dir,
+        ("x_mm", "deviation_um"),
+        time_decimals,
+        sigma,
+        rng,
+        |x, sign, t| {
             let mut dev = zero_um + positioning.at(x) + 0.5 * reversal_um * sign;
             for p in &parts {
                 dev += p(x, sign, t);
             }
-            if sigma > 0.0 {
-                dev += noise.sample(rng);
-            }
-            let _ = writeln!(
-                csv,
-                "{run},{},{x:.3},{:.*},{dev:.4}",
-                if sign > 0.0 { "+" } else { "-" },
-                if spec.log.is_some() { 2 } else { 1 },
-                t,
-            );
-            n_obs += 1;
-            t += dt;
-        }
-        t += pause;
-    }
-    std::fs::write(dir.join("runs.csv"), csv)?;
+            dev
+        },
+    )?;
     let manifest = serde_json::json!({
         "format": "mte-dataset/1",
         "kind": "axis",
         "description": "X-axis bidirectional positioning runs (laser interferometer)",
         "axis": "X",
-        "noise_um": stated_noise_um(sigma.max(0.05)),
+        "noise_um": stated_noise(sigma.max(0.05)),
         "data": "runs.csv",
     });
     let path = write_manifest(dir, manifest, &spec.base_model)?;

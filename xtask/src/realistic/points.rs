@@ -313,7 +313,7 @@ pub(crate) fn write(
         "description": "3-D points of a target on the spindle side, measured from the C table (simulated realistic machine)",
         "machine": "machine.json",
         "data": "points.csv",
-        "noise_um": super::axis::stated_noise_um(noise_um.max(0.05)),
+        "noise_um": super::axis::stated_noise(noise_um.max(0.05)),
         "target": "tool",
         "target_mm": [target_mm.x, target_mm.y, target_mm.z],
     });

@@ -2,12 +2,10 @@
 //! autocollimator and a polygon or a rotary interferometer. The reading is the deviation
 //! (measured − commanded angle, arcsec) at each target angle.
 
-use std::fmt::Write as _;
 use std::path::Path;
 
 use rand::Rng;
 use rand_chacha::ChaCha8Rng;
-use rand_distr::{Distribution, Normal};
 
 use super::smooth::{Periodic, signed};
 use super::{Hidden, Kind, Spec, Truth, angular_positioning, unsupported, write_manifest};
@@ -66,38 +64,33 @@ pub(crate) fn write(spec: &Spec, rng: &mut ChaCha8Rng, dir: &Path) -> std::io::R
         }
     }
 
-    let noise = Normal::new(0.0, sigma_arcsec.max(1e-300)).expect("finite σ");
-    let mut csv = String::from("run,direction,c_deg,t_s,deviation_arcsec\n");
-    let mut t = 0.0;
-    let mut n_obs = 0;
-    for (run, sign, order) in super::axis::sweeps(&targets, runs) {
-        for c in order {
+    let programme = super::axis::Programme {
+        targets: &targets,
+        runs,
+        dt,
+        pause,
+    };
+    let n_obs = programme.write(
+        dir,
+        ("c_deg", "deviation_arcsec"),
+        1,
+        sigma_arcsec,
+        rng,
+        |c, _, _| {
             let theta = c.to_radians();
             let mut dev = zero + positioning.at(theta);
             for &(amp, k, phase) in &harmonics {
                 dev += amp * (k * theta + phase).sin();
             }
-            let mut dev = dev * ARCSEC;
-            if sigma_arcsec > 0.0 {
-                dev += noise.sample(rng);
-            }
-            let _ = writeln!(
-                csv,
-                "{run},{},{c:.3},{t:.1},{dev:.4}",
-                if sign > 0.0 { "+" } else { "-" },
-            );
-            n_obs += 1;
-            t += dt;
-        }
-        t += pause;
-    }
-    std::fs::write(dir.join("runs.csv"), csv)?;
+            dev * ARCSEC
+        },
+    )?;
     let manifest = serde_json::json!({
         "format": "mte-dataset/1",
         "kind": "axis",
         "description": "C rotary table bidirectional positioning runs (autocollimator and polygon)",
         "axis": "C",
-        "noise_arcsec": ((sigma_arcsec.max(0.05) * 10.0).round() / 10.0).max(0.1),
+        "noise_arcsec": super::axis::stated_noise(sigma_arcsec.max(0.05)),
         "data": "runs.csv",
     });
     let path = write_manifest(dir, manifest, &spec.base_model)?;

@@ -16,7 +16,7 @@ use rand::Rng;
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, Normal};
 
-use super::axis::stated_noise_um;
+use super::axis::stated_noise;
 use super::geom::{Iso, LinearErrors, REALISTIC, V3, rot_x, rot_y, rot_z, trans};
 use super::smooth::signed;
 use super::{
@@ -383,7 +383,7 @@ pub(crate) fn write(spec: &Spec, rng: &mut ChaCha8Rng, dir: &Path) -> std::io::R
         "kind": "tracker",
         "description": "Laser-tracker multilateration of a three-axis machine",
         "machine": "machine.json",
-        "noise_um": stated_noise_um(sigma.max(0.05)),
+        "noise_um": stated_noise(sigma.max(0.05)),
         "data": "lengths.csv",
         "targets": "targets.csv",
         "setups": setups,
