@@ -415,6 +415,23 @@ impl Spread {
         out
     }
 
+    /// Whether every column of `spread.expand(b)` is zero (below 1e-15 in every row, as
+    /// [`crate::Term::is_invisible`]): functions the observations do not see. Without forming
+    /// the columns.
+    pub fn sees_nothing(&self, b: &DMat) -> bool {
+        assert_eq!(b.nrows(), self.values.len(), "one row per distinct value");
+        let (n, poses) = (self.rows, self.poses());
+        b.column_iter().all(|bj| {
+            (0..n).all(|i| {
+                let mut v = 0.0;
+                for k in 0..poses {
+                    v += self.weight[k * n + i] * bj[self.group[k * n + i]];
+                }
+                v.abs() < 1e-15
+            })
+        })
+    }
+
     /// The spread on the observations `rows` only (the same distinct values).
     pub fn select_rows(&self, rows: &[usize]) -> Spread {
         let n = self.rows;
@@ -531,6 +548,13 @@ mod tests {
         let direct = DMat::from_fn(6, 2, |i, j| a[i] * g(x[i])[j] + r[i] * g(x_ref[i])[j]);
         let columns = spread.expand(&b);
         assert!((&columns - &direct).amax() < 1e-15);
+        // Seen: as the columns say (a function of the positions only at 25, a reference
+        // position whose two readings' weights there differ, is seen too).
+        assert!(!spread.sees_nothing(&b));
+        assert!(spread.sees_nothing(&DMat::zeros(5, 2)));
+        let at_25 = DMat::from_fn(5, 1, |k, _| if k == 3 { 1e-3 } else { 0.0 });
+        assert!(!spread.sees_nothing(&at_25));
+        assert!(spread.expand(&at_25).amax() >= 1e-15);
         // Products with a design under weights, over some rows: Bᵀ (Sᵀ W² X) = Cᵀ W² X.
         let design = DMat::from_fn(6, 3, |i, j| ((i * 3 + j) as f64).cos());
         let w2 = DVec::from_fn(6, |i, _| 1.0 + i as f64);

@@ -58,12 +58,12 @@ pub trait Candidate: Send + Sync {
         self.variants(obs).iter().map(|t| t.columns.ncols()).sum()
     }
 
-    /// The variants as functions of one variable spread over the observations ([`Spread`]):
-    /// the spread and each variant's functions at its values, in the order of
-    /// [`Candidate::variants`] (whose columns are `spread.expand` of them). The diagnosis then
-    /// forms its products with the variants over the variable's distinct values instead of the
-    /// observations. `None` (the default): from the variants' columns.
-    fn spread(&self) -> Option<(std::sync::Arc<Spread>, Vec<DMat>)> {
+    /// The variants as functions of one variable spread over the observations
+    /// ([`SpreadVariants`]), in the order of [`Candidate::variants`]. The diagnosis then forms
+    /// its products with the variants over the variable's distinct values instead of the
+    /// observations, and a variant's columns only where it needs them. `None` (the default):
+    /// from the variants' columns.
+    fn spread(&self) -> Option<SpreadVariants> {
         None
     }
 
@@ -89,6 +89,20 @@ pub trait Candidate: Send + Sync {
             role: self.role(),
         })
     }
+}
+
+/// A candidate's variants as functions of one variable seen through a spread
+/// ([`Candidate::spread`]): variant `v` is `headers[v]` with the columns
+/// `spread.expand(&bases[v])`.
+pub struct SpreadVariants {
+    /// The spread of the variable over the observations.
+    pub spread: std::sync::Arc<Spread>,
+    /// Each variant's functions at the spread's distinct values (one row per value, one column
+    /// per design column).
+    pub bases: Vec<DMat>,
+    /// Each variant as [`Candidate::variants`] gives it but for its columns: none (0 rows, as
+    /// many columns as the variant has).
+    pub headers: Vec<Term>,
 }
 
 /// What a refinement minimises ([`Candidate::refine`]): the weighted residual sum of squares a
@@ -1156,7 +1170,8 @@ impl Scan {
 
     /// A scan over `grid` of functions of one variable seen through `spread`: the term of a
     /// value is `make(value, columns)` with the columns `spread.expand(basis(values, value))`
-    /// ([`Candidate::spread`]).
+    /// ([`Candidate::spread`]). `make` places the columns in the term as they are (the
+    /// diagnosis forms a term without them and adds them where it needs them).
     pub fn spread(
         grid: Vec<f64>,
         refine_grid: bool,
@@ -1192,16 +1207,31 @@ impl Candidate for Scan {
         self.grid.iter().map(|&p| self.term(p)).collect()
     }
 
-    fn spread(&self) -> Option<(std::sync::Arc<Spread>, Vec<DMat>)> {
-        let ScanTerms::Spread { spread, basis, .. } = &self.terms else {
+    fn spread(&self) -> Option<SpreadVariants> {
+        let ScanTerms::Spread {
+            spread,
+            basis,
+            make,
+        } = &self.terms
+        else {
             return None;
         };
-        let bases = self
+        let bases: Vec<DMat> = self
             .grid
             .iter()
             .map(|&p| basis(spread.values(), p))
             .collect();
-        Some((spread.clone(), bases))
+        let headers = self
+            .grid
+            .iter()
+            .zip(&bases)
+            .map(|(&p, b)| make(p, DMat::zeros(0, b.ncols())))
+            .collect();
+        Some(SpreadVariants {
+            spread: spread.clone(),
+            bases,
+            headers,
+        })
     }
 
     fn refine(&self, best: usize, score: &Score) -> Option<Term> {

@@ -10,7 +10,7 @@ use mte_linalg::{DMat, DVec, stats};
 use rayon::prelude::*;
 use serde::Serialize;
 
-use crate::candidate::{Candidate, Role, Score, Spread};
+use crate::candidate::{Candidate, Role, Score, Spread, SpreadVariants};
 use crate::data::{Observations, VariableKind};
 use crate::fit::{
     Directions, Folds, Increment, Projector, SEPARABILITY_TOLERANCE, Solution, SpreadProducts,
@@ -1217,6 +1217,8 @@ fn check_params(p: &DiagnoseParams) -> Result<()> {
 /// Candidates named like a base term are the base's own: they are not searched.
 #[derive(Default)]
 struct Pool {
+    /// The variants by entry; those of an entry with a spread without their columns
+    /// ([`Pool::term`]).
     variants: Vec<Vec<Term>>,
     /// Of an entry whose variants are functions of one variable ([`Candidate::spread`]): the
     /// spread and the variants' functions at its values side by side.
@@ -1240,6 +1242,10 @@ struct Pool {
     /// and the outer folds' mostly complete with the same orders).
     completion_products: std::sync::Mutex<HashMap<usize, std::sync::Arc<EntryProducts>>>,
 }
+
+/// A pool entry holds its variants through their spread ([`Candidate::spread`]) where the
+/// observations are at least this many times its distinct values.
+const SPREAD_VALUES_PER_ROW: usize = 4;
 
 /// A pool entry's variants as functions of one variable: `spread.expand(values)` are their
 /// columns side by side.
@@ -1284,33 +1290,39 @@ impl Pool {
                 if c.role() == Role::Probe {
                     return (Vec::new(), None);
                 }
-                let kept = |t: &Term| !t.is_invisible() && t.columns.nrows() == n;
-                let variants = c.variants(obs);
-                // (A spread that does not match the variants one for one is not used: the
-                // products then come from the columns.)
-                let matches = |(spread, bases): &(std::sync::Arc<Spread>, Vec<DMat>)| {
-                    bases.len() == variants.len()
-                        && spread.rows() == n
-                        && bases.iter().zip(&variants).all(|(b, t)| {
-                            b.nrows() == spread.values().len() && b.ncols() == t.width()
+                // A spread pays where its distinct values are few against the observations
+                // (the products of each outer fold's rows go over all of them): otherwise, or
+                // where it does not match its variants' widths, the products come from the
+                // columns.
+                let matches = |v: &SpreadVariants| {
+                    v.spread.values().len() * SPREAD_VALUES_PER_ROW <= n
+                        && v.bases.len() == v.headers.len()
+                        && v.spread.rows() == n
+                        && v.bases.iter().zip(&v.headers).all(|(b, t)| {
+                            b.nrows() == v.spread.values().len()
+                                && b.ncols() == t.width()
+                                && t.columns.nrows() == 0
                         })
                 };
-                let spread = c.spread().filter(matches).map(|(spread, bases)| {
-                    let kept: Vec<DMat> = bases
-                        .into_iter()
-                        .zip(&variants)
-                        .filter_map(|(b, t)| kept(t).then_some(b))
-                        .collect();
-                    let width = kept.iter().map(DMat::ncols).sum();
-                    let mut values = DMat::zeros(spread.values().len(), width);
-                    let mut at = 0;
-                    for b in kept {
-                        values.columns_mut(at, b.ncols()).copy_from(&b);
-                        at += b.ncols();
-                    }
-                    (spread, values)
-                });
-                (variants.into_iter().filter(kept).collect(), spread)
+                let Some(v) = c.spread().filter(matches) else {
+                    let kept = |t: &Term| !t.is_invisible() && t.columns.nrows() == n;
+                    return (c.variants(obs).into_iter().filter(kept).collect(), None);
+                };
+                // The variants the observations see, without their columns.
+                let (headers, bases): (Vec<Term>, Vec<DMat>) = v
+                    .headers
+                    .into_iter()
+                    .zip(v.bases)
+                    .filter(|(_, b)| !v.spread.sees_nothing(b))
+                    .unzip();
+                let width = headers.iter().map(Term::width).sum();
+                let mut values = DMat::zeros(v.spread.values().len(), width);
+                let mut at = 0;
+                for b in bases {
+                    values.columns_mut(at, b.ncols()).copy_from(&b);
+                    at += b.ncols();
+                }
+                (headers, Some((v.spread, values)))
             })
             .collect()
     }
@@ -1377,8 +1389,7 @@ impl Pool {
                 group[i] = k;
             }
         }
-        let blocks = pool.column_blocks();
-        let grams = block_grams(&blocks, &pool.w2, &group, outer.len().max(1));
+        let grams = pool.variant_grams(&group, outer.len().max(1));
         let p0 = x_base.ncols();
         let mut xy = x_base.resize_horizontally(p0 + 1, 0.0);
         xy.set_column(p0, &obs.values);
@@ -1430,8 +1441,9 @@ impl Pool {
             groups.iter().map(|g| Some(&g[..])).collect()
         };
         let total = self.variants.iter().flatten().map(Term::width).sum();
+        // (The groups independent: in parallel.)
         dense
-            .into_iter()
+            .into_par_iter()
             .zip(rows)
             .map(|(dense, rows)| {
                 let mut out = DMat::zeros(x.ncols(), total);
@@ -1464,8 +1476,95 @@ impl Pool {
     }
 
     /// Every variant's columns, in pool order.
-    fn column_blocks(&self) -> Vec<&DMat> {
-        self.variants.iter().flatten().map(|t| &t.columns).collect()
+    /// Variant `vi` of entry `ci` with its columns: an entry with a spread holds its
+    /// variants without them (its functions' values at the spread's values instead, which is
+    /// all its products need), formed here.
+    fn term(&self, ci: usize, vi: usize) -> Cow<'_, Term> {
+        let t = &self.variants[ci][vi];
+        match &self.spreads[ci] {
+            None => Cow::Borrowed(t),
+            Some(_) => Cow::Owned(Term {
+                columns: self.columns(ci, vi).into_owned(),
+                ..t.clone()
+            }),
+        }
+    }
+
+    /// The columns of variant `vi` of entry `ci` ([`Pool::term`]).
+    fn columns(&self, ci: usize, vi: usize) -> Cow<'_, DMat> {
+        match &self.spreads[ci] {
+            None => Cow::Borrowed(&self.variants[ci][vi].columns),
+            Some((spread, values)) => {
+                let at = self.offsets[ci][vi] - self.offsets[ci][0];
+                let b = values.columns(at, self.variants[ci][vi].width());
+                Cow::Owned(spread.expand(&b.into_owned()))
+            }
+        }
+    }
+
+    /// Each variant's Gram `Cᵀ W² C` over the rows of each group (`group[i]` < `groups`: row
+    /// `i`'s), `[group][variant in pool order]`: of an entry with a spread as `Bᵀ (Sᵀ W² S) B`
+    /// from its distinct values ([`Spread::gram`]), of the others from their columns
+    /// ([`block_grams`]).
+    fn variant_grams(&self, group: &[usize], groups: usize) -> Vec<Vec<DMat>> {
+        let dense: Vec<&DMat> = self
+            .variants
+            .iter()
+            .zip(&self.spreads)
+            .filter(|(_, s)| s.is_none())
+            .flat_map(|(v, _)| v.iter().map(|t| &t.columns))
+            .collect();
+        let mut dense = block_grams(&dense, &self.w2, group, groups)
+            .into_iter()
+            .map(Vec::into_iter)
+            .collect::<Vec<_>>();
+        // Each spread entry's `Sᵀ W² S` on each group's rows, then its variants' functions.
+        let spread_grams: Vec<Vec<Vec<DMat>>> = self
+            .spreads
+            .par_iter()
+            .enumerate()
+            .filter_map(|(ci, s)| s.as_ref().map(|s| (ci, s)))
+            .map(|(ci, (spread, values))| {
+                (0..groups)
+                    .map(|g| {
+                        let w2 = DVec::from_iterator(
+                            self.w2.len(),
+                            self.w2
+                                .iter()
+                                .zip(group)
+                                .map(|(&w, &h)| if h == g { w } else { 0.0 }),
+                        );
+                        let m = spread.gram(&w2);
+                        let first = self.offsets[ci][0];
+                        self.variants[ci]
+                            .iter()
+                            .zip(&self.offsets[ci])
+                            .map(|(t, &at)| {
+                                Spread::quadratic(
+                                    &m,
+                                    &values.columns(at - first, t.width()).into_owned(),
+                                )
+                            })
+                            .collect()
+                    })
+                    .collect()
+            })
+            .collect();
+        let mut spread_grams = spread_grams.into_iter();
+        let mut out: Vec<Vec<DMat>> = vec![Vec::new(); groups];
+        for (v, s) in self.variants.iter().zip(&self.spreads) {
+            if s.is_some() {
+                let of_entry = spread_grams.next().expect("one per spread entry");
+                for (out, grams) in out.iter_mut().zip(of_entry) {
+                    out.extend(grams);
+                }
+            } else {
+                for (out, grams) in out.iter_mut().zip(&mut dense) {
+                    out.extend(grams.by_ref().take(v.len()));
+                }
+            }
+        }
+        out
     }
 
     /// Values in pool order (one per variant) as the pool's nesting.
@@ -1568,7 +1667,7 @@ impl Pool {
     /// when `t` is no such entry's.
     fn completion_rows(&self, t: &Term, held_out: Option<usize>) -> Option<DMat> {
         let &ci = self.by_name.get(&t.name)?;
-        let entry = &self.variants[ci][0].columns;
+        let entry = self.columns(ci, 0);
         let columns: Vec<usize> = t
             .columns
             .column_iter()
@@ -1625,7 +1724,7 @@ impl Pool {
         if let Some(p) = cache().get(&ci) {
             return p.clone();
         }
-        let shares = self.fold_products(&self.variants[ci][0].columns);
+        let shares = self.fold_products(&self.columns(ci, 0));
         // Summed in fold order, as the pool's own products are.
         let mut all = shares[0].clone();
         for share in &shares[1..] {
@@ -1721,6 +1820,80 @@ struct SearchResult {
     capped: Option<(String, f64, usize)>,
 }
 
+/// The pool's variants as one search sees them (the pool is shared): those a refinement of
+/// this search changed, and a recurring cause's under the name of its next component
+/// ([`nth_component`]).
+struct SearchVariants<'p> {
+    pool: &'p Pool,
+    refined: HashMap<(usize, usize), Term>,
+    /// Of each entry: which component its variants would be (0: the first).
+    component: Vec<usize>,
+}
+
+impl<'p> SearchVariants<'p> {
+    fn new(pool: &'p Pool) -> Self {
+        SearchVariants {
+            pool,
+            refined: HashMap::new(),
+            component: vec![0; pool.variants.len()],
+        }
+    }
+
+    /// Whether a refinement changed variant `vi` of entry `ci` (its products are not the
+    /// pool's).
+    fn is_refined(&self, ci: usize, vi: usize) -> bool {
+        self.refined.contains_key(&(ci, vi))
+    }
+
+    /// The variant as scored: the refined one (with its columns), else the pool's (under its
+    /// first component's name, and without its columns where the pool holds none,
+    /// [`Pool::term`]).
+    fn as_scored(&self, ci: usize, vi: usize) -> &Term {
+        self.refined
+            .get(&(ci, vi))
+            .unwrap_or(&self.pool.variants[ci][vi])
+    }
+
+    /// The variant under its name, perhaps without its columns.
+    fn header(&self, ci: usize, vi: usize) -> Cow<'_, Term> {
+        match (self.refined.get(&(ci, vi)), self.component[ci]) {
+            (Some(t), _) => Cow::Borrowed(t),
+            (None, 0) => Cow::Borrowed(&self.pool.variants[ci][vi]),
+            (None, k) => Cow::Owned(nth_component(self.pool.variants[ci][vi].clone(), k)),
+        }
+    }
+
+    /// The variant under its name, with its columns.
+    fn term(&self, ci: usize, vi: usize) -> Term {
+        match self.refined.get(&(ci, vi)) {
+            Some(t) => t.clone(),
+            None => nth_component(self.pool.term(ci, vi).into_owned(), self.component[ci]),
+        }
+    }
+
+    /// The variant's columns.
+    fn columns(&self, ci: usize, vi: usize) -> Cow<'_, DMat> {
+        match self.refined.get(&(ci, vi)) {
+            Some(t) => Cow::Borrowed(&t.columns),
+            None => self.pool.columns(ci, vi),
+        }
+    }
+
+    /// Variant `vi` of entry `ci` refined to `term`.
+    fn refine(&mut self, ci: usize, vi: usize, term: Term) {
+        let term = nth_component(term, self.component[ci]);
+        self.refined.insert((ci, vi), term);
+    }
+
+    /// Entry `ci`'s variants are its `k`-th further component from now on.
+    fn next_component(&mut self, ci: usize, k: usize) {
+        self.component[ci] = k;
+        for (_, t) in self.refined.iter_mut().filter(|((c, _), _)| *c == ci) {
+            *t = nth_component(t.clone(), k);
+        }
+    }
+}
+
 /// The search over candidates, on the observations whose weight is not zero.
 #[derive(Clone, Copy)]
 struct Searcher<'a> {
@@ -1809,10 +1982,8 @@ impl Searcher<'_> {
                 None => DMat::zeros(0, 0),
             })
             .collect();
-        let columns: Vec<&DMat> = entries
-            .iter()
-            .map(|&ci| &self.pool.variants[ci][0].columns)
-            .collect();
+        let columns: Vec<Cow<DMat>> = entries.iter().map(|&ci| self.pool.columns(ci, 0)).collect();
+        let columns: Vec<&DMat> = columns.iter().map(|c| c.as_ref()).collect();
         let own = entries.iter().map(|ci| rows.own[ci].clone()).collect();
         let increments =
             fit.increments_knowing(&columns, &mut known, own, &fit.basis_of(&self.obs.values));
@@ -1843,9 +2014,9 @@ impl Searcher<'_> {
             .into_iter()
             .filter(|&(_, p)| p * (eligible as f64) < COMPLETION_LEVEL)
             .find_map(|(ci, _)| {
-                let t = &self.pool.variants[ci][0];
+                let t = self.pool.term(ci, 0);
                 let keep = fit.separable_columns(&t.columns);
-                (!keep.is_empty()).then(|| keep_columns(t.clone(), &keep))
+                (!keep.is_empty()).then(|| keep_columns(t.into_owned(), &keep))
             })
     }
 
@@ -1872,7 +2043,7 @@ impl Searcher<'_> {
     fn next_orders(&self, terms: &[Term]) -> Vec<Term> {
         self.next_order_entries(&terms.iter().collect::<Vec<_>>(), false)
             .into_iter()
-            .map(|ci| self.pool.variants[ci][0].clone())
+            .map(|ci| self.pool.term(ci, 0).into_owned())
             .collect()
     }
 
@@ -1895,13 +2066,7 @@ impl Searcher<'_> {
         let params = self.params;
         let y = &obs.values;
         let entries = self.pool.variants.len();
-        // Variants refined or renamed in this search (the pool itself is shared).
-        let mut overrides: HashMap<(usize, usize), Term> = HashMap::new();
-        let variant = |ov: &HashMap<(usize, usize), Term>, ci: usize, vi: usize| -> Term {
-            ov.get(&(ci, vi))
-                .cloned()
-                .unwrap_or_else(|| self.pool.variants[ci][vi].clone())
-        };
+        let mut variants = SearchVariants::new(self.pool);
         let mut used = vec![false; entries];
         let mut times_chosen = vec![0usize; entries];
         // Periodic causes at their most components: still tested, never added; one still
@@ -1930,8 +2095,6 @@ impl Searcher<'_> {
                 .search_products(&self.base[self.pool.base_terms..], &x, w, held_out);
         // The products of the terms beyond the base with every variant ([`Pool::model_products`]).
         let mut formed = Vec::new();
-        // Variants whose columns a refinement changed (not the pool's: no products).
-        let mut refined: std::collections::HashSet<(usize, usize)> = Default::default();
 
         // The variants' products with the base's directions (see below).
         let mut stable_qc: Option<DMat> = None;
@@ -1975,8 +2138,9 @@ impl Searcher<'_> {
             qc.rows_mut(stable, projector.rank() - stable)
                 .copy_from(&projector.basis_products_of(stable..projector.rank(), &xtc));
             let qty = projector.basis_of(y);
+            // (A variant a refinement changed is not the pool's: no products.)
             let increment = |ci: usize, vi: usize, t: &Term| {
-                if refined.contains(&(ci, vi)) {
+                if variants.is_refined(ci, vi) {
                     projector.increment(&t.columns)
                 } else {
                     let (at, k) = (self.pool.offsets[ci][vi], t.width());
@@ -1997,7 +2161,7 @@ impl Searcher<'_> {
             let present = |name: &str| {
                 terms.iter().any(|t| t.name == name)
                     || self.pool.by_name.get(name).is_some_and(|&k| {
-                        increment(k, 0, &self.pool.variants[k][0]).separability
+                        increment(k, 0, variants.as_scored(k, 0)).separability
                             < SEPARABILITY_TOLERANCE
                     })
             };
@@ -2023,12 +2187,7 @@ impl Searcher<'_> {
                 let mut best: Option<(usize, Increment)> = None;
                 let mut profile: Vec<(usize, f64)> = Vec::new();
                 let tried: Vec<(usize, &Term)> = (0..self.pool.variants[ci].len())
-                    .map(|vi| {
-                        let t = overrides
-                            .get(&(ci, vi))
-                            .unwrap_or(&self.pool.variants[ci][vi]);
-                        (vi, t)
-                    })
+                    .map(|vi| (vi, variants.as_scored(ci, vi)))
                     .filter(|(_, t)| {
                         times_chosen[ci] == 0
                             || !near_a_component(obs, t, &chosen, self.pool.source[ci], None)
@@ -2057,7 +2216,7 @@ impl Searcher<'_> {
                     if explain && steps.is_empty() {
                         record_not_separable(
                             &mut not_separable,
-                            &self.pool.variants[ci][0],
+                            &self.pool.term(ci, 0),
                             &terms,
                             &x,
                             &projector,
@@ -2106,7 +2265,7 @@ impl Searcher<'_> {
                             let term = match self.candidate(*ci).refine(peak, &score) {
                                 Some(t) => t,
                                 None if peak == *vi => return None,
-                                None => variant(&overrides, *ci, peak),
+                                None => variants.term(*ci, peak),
                             };
                             let inc = projector.increment(&term.columns);
                             Some((peak, term, inc))
@@ -2122,8 +2281,7 @@ impl Searcher<'_> {
                 let (ci, vi, inc, _) = &mut graded[g];
                 *vi = peak;
                 *inc = better;
-                overrides.insert((*ci, *vi), nth_component(term, times_chosen[*ci]));
-                refined.insert((*ci, *vi));
+                variants.refine(*ci, *vi, term);
             }
             let mut scored: Vec<Scored> = graded
                 .iter()
@@ -2145,12 +2303,11 @@ impl Searcher<'_> {
             let cvs: Vec<Option<f64>> = shortlisted
                 .par_iter()
                 .map(|&(ci, vi, p, _)| {
-                    (p < params.alpha)
-                        .then(|| fold_fits.rms_with(&variant(&overrides, ci, vi).columns))
+                    (p < params.alpha).then(|| fold_fits.rms_with(&variants.columns(ci, vi)))
                 })
                 .collect();
             for (&(ci, vi, p, share), cv) in shortlisted.iter().zip(cvs) {
-                let t = variant(&overrides, ci, vi);
+                let t = variants.header(ci, vi);
                 if capped[ci] {
                     // (The shortlist's one capped cause.)
                     if cv.is_some_and(|r| r < cv_rms * (1.0 - params.min_gain)) {
@@ -2160,7 +2317,7 @@ impl Searcher<'_> {
                     let better = match best {
                         None => true,
                         Some((bc, bv, br)) => {
-                            let b_cost = complexity(&variant(&overrides, bc, bv));
+                            let b_cost = complexity(&variants.header(bc, bv));
                             let t_cost = complexity(&t);
                             // Parsimony: within 1 % of the best CV RMS the simpler cause wins.
                             if (r - br).abs() <= 0.01 * br {
@@ -2187,7 +2344,7 @@ impl Searcher<'_> {
                 if explain {
                     detection_limits = self.limits_beyond_next_orders(
                         &sensitivity,
-                        &overrides,
+                        &variants,
                         (&terms, &x, &projector, w),
                         (rss, dof),
                         variants_tested,
@@ -2209,7 +2366,7 @@ impl Searcher<'_> {
                 });
                 break (x, projector.into_owned());
             }
-            let term = variant(&overrides, ci, vi);
+            let term = variants.term(ci, vi);
             // Alternatives: shortlisted candidates that explain the same residual direction about
             // as well on held-out data (within 2 %).
             let chosen_perp = projector.residual_part(&term.columns);
@@ -2221,11 +2378,11 @@ impl Searcher<'_> {
                 }
                 let Some(&(cj, vj, _, _)) = scored
                     .iter()
-                    .find(|s| variant(&overrides, s.0, s.1).name == score.name)
+                    .find(|s| variants.header(s.0, s.1).name == score.name)
                 else {
                     continue;
                 };
-                let other = projector.residual_part(&variant(&overrides, cj, vj).columns);
+                let other = projector.residual_part(&variants.columns(cj, vj));
                 if max_cosine(&chosen_perp, &other) > 0.99 && !alternatives.contains(&score.name) {
                     alternatives.push(score.name.clone());
                 }
@@ -2255,11 +2412,7 @@ impl Searcher<'_> {
             }
             if recurs {
                 used[ci] = false;
-                let k = times_chosen[ci];
-                for vj in 0..self.pool.variants[ci].len() {
-                    let t = variant(&overrides, ci, vj);
-                    overrides.insert((ci, vj), nth_component(t, k));
-                }
+                variants.next_component(ci, times_chosen[ci]);
             }
             chosen.push(Chosen {
                 term,
@@ -2315,17 +2468,12 @@ impl Searcher<'_> {
     fn limits_beyond_next_orders(
         &self,
         sensitivity: &[Sensitivity<Increment>],
-        overrides: &HashMap<(usize, usize), Term>,
+        variants: &SearchVariants,
         (terms, x, projector, w): (&[Term], &DMat, &Projector, &DVec),
         rss_dof: (f64, usize),
         variants_tested: usize,
     ) -> Vec<DetectionLimit> {
         let obs = self.obs;
-        let term_of = |ci: usize, vi: usize| {
-            overrides
-                .get(&(ci, vi))
-                .unwrap_or(&self.pool.variants[ci][vi])
-        };
         let next = self.next_orders(terms);
         let x_next = design(&next.iter().collect::<Vec<_>>(), obs.len());
         let fit = projector.extended(&x_next);
@@ -2341,7 +2489,10 @@ impl Searcher<'_> {
         let beyond: HashMap<(usize, usize), (f64, f64)> = flat
             .par_chunks(BLOCK)
             .flat_map_iter(|chunk| {
-                let width: usize = chunk.iter().map(|c| term_of(c.0, c.1).width()).sum();
+                let width: usize = chunk
+                    .iter()
+                    .map(|c| variants.as_scored(c.0, c.1).width())
+                    .sum();
                 // The block's whitened columns, side by side, and their products with the
                 // directions (none without next orders: the energies beyond the model itself).
                 let b = if directions.ncols() == 0 {
@@ -2349,7 +2500,7 @@ impl Searcher<'_> {
                 } else {
                     let mut data = Vec::with_capacity(obs.len() * width);
                     for &(ci, vi, _) in chunk {
-                        let c = &term_of(ci, vi).columns;
+                        let c = variants.columns(ci, vi);
                         for column in c.as_slice().chunks_exact(c.nrows().max(1)) {
                             data.extend(column.iter().zip(w.iter()).map(|(c, w)| c * w));
                         }
@@ -2360,7 +2511,7 @@ impl Searcher<'_> {
                 chunk
                     .iter()
                     .filter_map(|&(ci, vi, inc)| {
-                        let k = term_of(ci, vi).width();
+                        let k = variants.as_scored(ci, vi).width();
                         at += k;
                         inc.beyond(&b.columns(at - k, k).into_owned())
                             .map(|e| ((ci, vi), e))
@@ -2382,7 +2533,7 @@ impl Searcher<'_> {
         let x_model = hcat(x, &x_next);
         self.detection_limits(
             &sensitivity,
-            |ci, vi| term_of(ci, vi).clone(),
+            variants,
             |c| confounded_with(c, &model, &x_model, &fit),
             rss_dof,
             variants_tested,
@@ -2390,8 +2541,8 @@ impl Searcher<'_> {
     }
 
     /// The detection limits of the causes in `sensitivity` (each with the energy a unit size of
-    /// each variant tested leaves beyond the model, [`Increment::beyond`]; `term(entry,
-    /// variant)` its term; `held_by(term)` the model terms a variant not separable is made of)
+    /// each variant tested leaves beyond the model, [`Increment::beyond`]; `variants` the
+    /// search's variants; `held_by(term)` the model terms a variant not separable is made of)
     /// against the model whose weighted residual sum of squares is `rss` on `dof` degrees of
     /// freedom, in a step that tested `variants_tested` variants (`None`: a variant the data
     /// cannot separate from the model). Set-up terms get none. The search
@@ -2406,7 +2557,7 @@ impl Searcher<'_> {
     fn detection_limits(
         &self,
         sensitivity: &[Sensitivity],
-        term: impl Fn(usize, usize) -> Term,
+        variants: &SearchVariants,
         held_by: impl Fn(&DMat) -> Vec<Vec<String>>,
         (rss, dof): (f64, usize),
         variants_tested: usize,
@@ -2437,10 +2588,10 @@ impl Searcher<'_> {
                     (k as f64 * stats::f_isf(level, k as f64, (dof - k) as f64)).max(gain)
                 });
                 let rotary = exposed_by_rotary(self.obs, t0);
-                let variants = energies
+                let limits = energies
                     .iter()
                     .map(|&(vi, e)| VariantLimit {
-                        at: hyper_of(&term(*ci, vi).family, rotary).map(|h| h.0),
+                        at: hyper_of(&variants.as_scored(*ci, vi).family, rotary).map(|h| h.0),
                         size: e.map(|(lo, hi)| {
                             if k == 1 {
                                 let lambda = *lambda_of.entry(k).or_insert_with(|| {
@@ -2468,7 +2619,7 @@ impl Searcher<'_> {
                     .iter()
                     .step_by(hidden.len().div_ceil(HELD_BY_SAMPLES).max(1))
                 {
-                    sampled.push((*ci, term(*ci, vi).columns.column(0).into_owned()));
+                    sampled.push((*ci, variants.columns(*ci, vi).column(0).into_owned()));
                 }
                 Some(DetectionLimit {
                     name: t0.name.clone(),
@@ -2476,7 +2627,7 @@ impl Searcher<'_> {
                     quantity: t0.coefficients[0].1,
                     summary: t0.summary.clone(),
                     at_quantity: hyper_of(&t0.family, rotary).map(|h| h.1),
-                    variants,
+                    variants: limits,
                     held_by: Vec::new(),
                 })
             })
@@ -2557,13 +2708,18 @@ impl Searcher<'_> {
         };
         let candidate = self.chosen_candidate(c);
         // A search's pool holds the variants; the final model's searcher has no pool.
+        let entry = self.pool.source.iter().position(|&s| s == c.candidate);
         let built;
-        let variants: &[Term] = match self.pool.source.iter().position(|&s| s == c.candidate) {
+        let variants: &[Term] = match entry {
             Some(entry) => &self.pool.variants[entry],
             None => {
                 built = candidate.variants(self.obs);
                 &built
             }
+        };
+        let columns = |v: usize| match entry {
+            Some(entry) => self.pool.columns(entry, v),
+            None => Cow::Borrowed(&variants[v].columns),
         };
         let component = chosen[..j]
             .iter()
@@ -2572,18 +2728,21 @@ impl Searcher<'_> {
         let projector = self.fit_without(chosen, j, base_fit);
         let rss_with = |t: &Term| projector.rss_w() - projector.increment(&t.columns).delta_rss;
         let free = |t: &Term| !near_a_component(self.obs, t, chosen, c.candidate, Some(j));
-        let increments =
-            projector.increments(variants.len(), |v| Cow::Borrowed(&variants[v].columns));
+        let increments = projector.increments(variants.len(), columns);
         let Some(best) = (0..variants.len())
             .filter(|&v| free(&variants[v]))
             .max_by(|&a, &b| increments[a].delta_rss.total_cmp(&increments[b].delta_rss))
         else {
             return;
         };
+        let best_term = Term {
+            columns: columns(best).into_owned(),
+            ..variants[best].clone()
+        };
         let rechosen = candidate
             .refine(best, &Score::new(rss_with))
-            .filter(|r| free(r) && rss_with(r) < rss_with(&variants[best]))
-            .unwrap_or_else(|| variants[best].clone());
+            .filter(|r| free(r) && rss_with(r) < rss_with(&best_term))
+            .unwrap_or(best_term);
         let (term, variant) = if rss_with(&rechosen) < rss_with(&c.term) {
             (rechosen, best)
         } else if component != c.component {
