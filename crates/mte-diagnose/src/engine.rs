@@ -1419,17 +1419,21 @@ impl Pool {
         self.products_of(x, &self.w2, &self.outer)
     }
 
-    /// `xᵀ diag(w2) C` with every variant's columns `C` side by side, over each of the groups
-    /// of rows `groups` (none: one product, of all rows): from the columns, or through the
-    /// distinct values of an entry's spread (`Sᵀ diag(w2) x`, formed once for all its variants).
-    fn products_of(&self, x: &DMat, w2: &DVec, groups: &[Vec<usize>]) -> Vec<DMat> {
-        let dense: Vec<&DMat> = self
-            .variants
+    /// The columns of every variant of the entries without a spread, in pool order.
+    fn dense_columns(&self) -> Vec<&DMat> {
+        self.variants
             .iter()
             .zip(&self.spreads)
             .filter(|(_, s)| s.is_none())
             .flat_map(|(v, _)| v.iter().map(|t| &t.columns))
-            .collect();
+            .collect()
+    }
+
+    /// `xᵀ diag(w2) C` with every variant's columns `C` side by side, over each of the groups
+    /// of rows `groups` (none: one product, of all rows): from the columns, or through the
+    /// distinct values of an entry's spread (`Sᵀ diag(w2) x`, formed once for all its variants).
+    fn products_of(&self, x: &DMat, w2: &DVec, groups: &[Vec<usize>]) -> Vec<DMat> {
+        let dense = self.dense_columns();
         let dense = if groups.is_empty() {
             vec![weighted_products(x, w2, &dense)]
         } else {
@@ -1507,13 +1511,7 @@ impl Pool {
     /// from its distinct values ([`Spread::gram`]), of the others from their columns
     /// ([`block_grams`]).
     fn variant_grams(&self, group: &[usize], groups: usize) -> Vec<Vec<DMat>> {
-        let dense: Vec<&DMat> = self
-            .variants
-            .iter()
-            .zip(&self.spreads)
-            .filter(|(_, s)| s.is_none())
-            .flat_map(|(v, _)| v.iter().map(|t| &t.columns))
-            .collect();
+        let dense = self.dense_columns();
         let mut dense = block_grams(&dense, &self.w2, group, groups)
             .into_iter()
             .map(Vec::into_iter)
