@@ -412,10 +412,7 @@ fn hidden_scale_error_is_named_scale() {
 fn rotary_axis_worm_gear_error_and_reversal_are_found_in_arcsec() {
     const NOISE_ARCSEC: f64 = 0.8;
     let (tooth_arcsec, reversal_arcsec) = (3.0, 4.0);
-    let dir = std::env::temp_dir().join(format!("mte-diagnose-axis-rotary-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
     let mut rng = ChaCha8Rng::seed_from_u64(31);
-    let noise = Normal::new(0.0, NOISE_ARCSEC).unwrap();
     let targets: Vec<f64> = (0..=24)
         .map(|i| {
             let jitter: f64 = rand::Rng::random_range(&mut rng, -5.0..5.0);
@@ -423,32 +420,18 @@ fn rotary_axis_worm_gear_error_and_reversal_are_found_in_arcsec() {
             (c * 10.0).round() / 10.0
         })
         .collect();
-    let mut csv = String::from("run,direction,c_deg,t_s,deviation_arcsec\n");
-    let mut t = 0.0;
-    for run in 1..=3 {
-        for sign in [1.0, -1.0] {
-            let order: Vec<f64> = if sign > 0.0 {
-                targets.clone()
-            } else {
-                targets.iter().rev().copied().collect()
-            };
-            for c in order {
-                let dev = 2.0
-                    + 0.5 * sign * reversal_arcsec
-                    + tooth_arcsec * (36.0 * c.to_radians() + 1.0).sin()
-                    + noise.sample(&mut rng);
-                let d = if sign > 0.0 { "+" } else { "-" };
-                csv.push_str(&format!("{run},{d},{c:.1},{t:.0},{dev:.3}\n"));
-                t += 10.0;
-            }
-        }
-    }
-    std::fs::write(dir.join("runs.csv"), csv).unwrap();
-    let manifest = format!(
-        r#"{{"format": "mte-dataset/1", "kind": "axis", "axis": "C", "noise_arcsec": {NOISE_ARCSEC}, "data": "runs.csv"}}"#
+    let manifest = write_runs(
+        "rotary",
+        "C",
+        &targets,
+        NOISE_ARCSEC,
+        31,
+        10.0,
+        |c, sign, _, _| {
+            2.0 + 0.5 * sign * reversal_arcsec + tooth_arcsec * (36.0 * c.to_radians() + 1.0).sin()
+        },
     );
-    std::fs::write(dir.join("manifest.json"), manifest).unwrap();
-    let d = run(&dir.join("manifest.json"));
+    let d = run(&manifest);
     let names: Vec<&str> = d.findings.iter().map(|f| f.name.as_str()).collect();
     assert_eq!(d.findings.len(), 2, "{names:?}");
     let arcsec = |rad: f64| rad.to_degrees() * 3600.0;
