@@ -11,9 +11,9 @@ mod tracker;
 
 use std::path::Path;
 
-use crate::Result;
 use crate::dataset::ManifestFile;
 use crate::model::{ObservationModel, Prepared, prepare};
+use crate::{DiagnoseError, Result};
 
 pub use axis::AxisRuns;
 pub(crate) use machine::relative_form;
@@ -71,9 +71,15 @@ const INSTRUMENTS: &[Instrument] = &[
 /// format has no such field).
 ///
 /// # Errors
-/// [`crate::DiagnoseError::Dataset`] naming the file, line and field for unreadable or
-/// malformed input.
+/// [`DiagnoseError::Dataset`] naming the file, line and field for unreadable or malformed
+/// input; [`DiagnoseError::InvalidData`] for a `noise_um` that is not a positive number.
 pub fn load_with_noise(manifest_path: &Path, noise_um: Option<f64>) -> Result<Prepared> {
+    if let Some(u) = noise_um.filter(|u| !(u.is_finite() && *u > 0.0)) {
+        return Err(DiagnoseError::InvalidData {
+            field: "the noise given (noise_um, `mte diagnose --noise-um`)".into(),
+            detail: format!("{u} µm, expected the positive standard uncertainty of one reading"),
+        });
+    }
     let file = ManifestFile::read(manifest_path)?;
     let format = file
         .str_field("format")

@@ -94,3 +94,19 @@ fn an_absurd_point_is_an_error_not_a_hang() {
         "{err}"
     );
 }
+
+#[test]
+fn a_noise_given_that_is_not_positive_is_an_error_naming_it() {
+    let manifest = fixture().join("manifest.json");
+    for bad in [-0.5, 0.0, f64::NAN] {
+        let err = mte_diagnose::load_with_noise(&manifest, Some(bad))
+            .err()
+            .map(|e| e.to_string())
+            .unwrap_or_default();
+        assert!(
+            err.contains("--noise-um") && err.contains("positive"),
+            "{bad}: {err}"
+        );
+    }
+    assert!(mte_diagnose::load_with_noise(&manifest, Some(0.5)).is_ok());
+}
