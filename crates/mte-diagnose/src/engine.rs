@@ -1479,7 +1479,6 @@ impl Pool {
         all.pop().expect("one product")
     }
 
-    /// Every variant's columns, in pool order.
     /// Variant `vi` of entry `ci` with its columns: an entry with a spread holds its
     /// variants without them (its functions' values at the spread's values instead, which is
     /// all its products need), formed here.
@@ -1496,14 +1495,18 @@ impl Pool {
 
     /// The columns of variant `vi` of entry `ci` ([`Pool::term`]).
     fn columns(&self, ci: usize, vi: usize) -> Cow<'_, DMat> {
-        match &self.spreads[ci] {
+        match self.spread_values(ci, vi) {
             None => Cow::Borrowed(&self.variants[ci][vi].columns),
-            Some((spread, values)) => {
-                let at = self.offsets[ci][vi] - self.offsets[ci][0];
-                let b = values.columns(at, self.variants[ci][vi].width());
-                Cow::Owned(spread.expand(&b.into_owned()))
-            }
+            Some((spread, b)) => Cow::Owned(spread.expand(&b)),
         }
+    }
+
+    /// Of entry `ci` with a spread: the spread and variant `vi`'s functions at its values.
+    fn spread_values(&self, ci: usize, vi: usize) -> Option<(&Spread, DMat)> {
+        let (spread, values) = self.spreads[ci].as_ref()?;
+        let at = self.offsets[ci][vi] - self.offsets[ci][0];
+        let b = values.columns(at, self.variants[ci][vi].width());
+        Some((spread, b.into_owned()))
     }
 
     /// Each variant's Gram `Cᵀ W² C` over the rows of each group (`group[i]` < `groups`: row
@@ -1521,8 +1524,8 @@ impl Pool {
             .spreads
             .par_iter()
             .enumerate()
-            .filter_map(|(ci, s)| s.as_ref().map(|s| (ci, s)))
-            .map(|(ci, (spread, values))| {
+            .filter_map(|(ci, s)| s.as_ref().map(|(spread, _)| (ci, spread)))
+            .map(|(ci, spread)| {
                 (0..groups)
                     .map(|g| {
                         let w2 = DVec::from_iterator(
@@ -1533,16 +1536,9 @@ impl Pool {
                                 .map(|(&w, &h)| if h == g { w } else { 0.0 }),
                         );
                         let m = spread.gram(&w2);
-                        let first = self.offsets[ci][0];
-                        self.variants[ci]
-                            .iter()
-                            .zip(&self.offsets[ci])
-                            .map(|(t, &at)| {
-                                Spread::quadratic(
-                                    &m,
-                                    &values.columns(at - first, t.width()).into_owned(),
-                                )
-                            })
+                        (0..self.variants[ci].len())
+                            .filter_map(|vi| self.spread_values(ci, vi))
+                            .map(|(_, b)| Spread::quadratic(&m, &b))
                             .collect()
                     })
                     .collect()
@@ -2733,9 +2729,9 @@ impl Searcher<'_> {
         else {
             return;
         };
-        let best_term = Term {
-            columns: columns(best).into_owned(),
-            ..variants[best].clone()
+        let best_term = match entry {
+            Some(entry) => self.pool.term(entry, best).into_owned(),
+            None => variants[best].clone(),
         };
         let rechosen = candidate
             .refine(best, &Score::new(rss_with))
