@@ -2360,11 +2360,11 @@ impl Searcher<'_> {
                 });
                 break (x, projector.into_owned());
             }
-            let term = variants.term(ci, vi);
+            let mut term = variants.term(ci, vi);
             // Alternatives: shortlisted candidates that explain the same residual direction about
             // as well on held-out data (within 2 %).
             let chosen_perp = projector.residual_part(&term.columns);
-            let mut alternatives = Vec::new();
+            let mut alternatives: Vec<(String, usize, usize, f64)> = Vec::new();
             for score in ranking.iter().filter(|c| c.name != term.name) {
                 let Some(r) = score.cv_rms else { continue };
                 if r > new_cv * 1.02 {
@@ -2377,10 +2377,27 @@ impl Searcher<'_> {
                     continue;
                 };
                 let other = projector.residual_part(&variants.columns(cj, vj));
-                if max_cosine(&chosen_perp, &other) > 0.99 && !alternatives.contains(&score.name) {
-                    alternatives.push(score.name.clone());
+                if max_cosine(&chosen_perp, &other) > 0.99
+                    && !alternatives.iter().any(|a| a.0 == score.name)
+                {
+                    alternatives.push((score.name.clone(), cj, vj, r));
                 }
             }
+            // Of a squareness and its equivalent on the plane's other axis, which the data cannot
+            // tell apart, the one ISO 230-1 names (EC0Y rather than EC0X).
+            let (ci, vi, new_cv) = match alternatives
+                .iter()
+                .position(|a| is_iso_squareness_of(&a.0, &term))
+            {
+                Some(k) => {
+                    let (_, cj, vj, r) = alternatives.remove(k);
+                    alternatives.push((term.name.clone(), ci, vi, new_cv));
+                    term = variants.term(cj, vj);
+                    (cj, vj, r)
+                }
+                None => (ci, vi, new_cv),
+            };
+            let alternatives: Vec<String> = alternatives.into_iter().map(|a| a.0).collect();
             let separated_by = separating_hint(&term, &alternatives, &self.pool.variants);
             let p_value = scored.iter().find(|s| s.0 == ci).map_or(1.0, |s| s.2);
             steps.push(Step {
@@ -4413,6 +4430,24 @@ fn separating_hint(chosen: &Term, alternatives: &[String], pool: &[Vec<Term>]) -
 /// How much a term asks of the data: coefficients first, then hyper-parameters and
 /// dependence on time or polynomial degree (a constant location error is simpler than a drift
 /// that happens to look constant).
+/// Whether `name` is the squareness of the same plane as the squareness `t`, in the axis
+/// ISO 230-1 names it by where `t` is not: the later axis of the plane (X, Y, Z order) against
+/// the earlier one — `EC0Y` for `EC0X` (Y against X), `EB0Z` for `EB0X`, `EA0Z` for `EA0Y`.
+fn is_iso_squareness_of(name: &str, t: &Term) -> bool {
+    let later = |n: &str| -> Option<bool> {
+        let &[b'E', r, b'0', a] = n.as_bytes() else {
+            return None;
+        };
+        let about = b"ABC".iter().position(|&c| c == r)?;
+        let axis = b"XYZ".iter().position(|&c| c == a)?;
+        (axis != about).then(|| axis > 3 - about - axis)
+    };
+    t.family == Family::Squareness
+        && name.get(..3) == t.name.get(..3)
+        && later(&t.name) == Some(false)
+        && later(name) == Some(true)
+}
+
 fn complexity(t: &Term) -> (usize, usize) {
     let shape = match t.family {
         Family::Component { degree } => degree,

@@ -136,7 +136,10 @@ fn squareness_effect(
     av[axis_dir] = 1.0;
     dv[slot_dir] = 1.0;
     let sign = rv.cross(&av).dot(&dv);
-    let plane: String = [letter(axis_dir), letter(slot_dir)].iter().collect();
+    let plane: String = [axis_dir.min(slot_dir), axis_dir.max(slot_dir)]
+        .map(letter)
+        .iter()
+        .collect();
     let iso = catalogue::location_error_name(Component::ALL[r + 3], axis);
     Some(SlotEffect {
         name: iso.clone(),
