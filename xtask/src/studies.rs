@@ -698,8 +698,8 @@ pub struct PowerCell {
 /// lists the others as not separable. What the user's model lacks is what a diagnosis can find.
 pub fn user_model_lacking(kind: Kind, effect: Effect) -> BaseModel {
     let except: &[&str] = match effect {
-        // (The points machine has no B.)
-        Effect::Squareness if kind == Kind::Points => &["EC0Y", "EC0X"],
+        // (The points and tracker machines have no B.)
+        Effect::Squareness if matches!(kind, Kind::Points | Kind::Tracker) => &["EC0Y", "EC0X"],
         Effect::Squareness => &["EC0Y", "EC0X", "EC0B"],
         Effect::AngularPositioning => &["ECC"],
         Effect::BTilt => &["EA0B", "EAB", "EA0Y", "EA0Z"],

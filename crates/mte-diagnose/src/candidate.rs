@@ -404,6 +404,14 @@ pub fn physical_effects(
                     column_matrix(&slot.constant_column()),
                     slot.quantity,
                 );
+                // A squareness shows along the axis it tilts, a rotary axis' location error
+                // against that axis' angle.
+                let t = match located_axis(&slot.name)
+                    .filter(|a| obs.variable(a).is_some_and(|v| varies(&v.values)))
+                {
+                    Some(axis) => t.exposed_by(axis),
+                    None => t,
+                };
                 if let Some(settling) = &settling {
                     for drift in drift_candidates(&t, slot.reference.as_ref(), settling) {
                         out.push(Box::new(Requires {
@@ -1030,6 +1038,13 @@ fn component_axis(slot: &SlotEffect) -> Option<String> {
         SlotRole::Component { axis, .. } => Some(axis.clone()),
         SlotRole::Constant { .. } => None,
     }
+}
+
+/// The axis of a location or squareness error by its ISO 230-1 name: `Y` of `EC0Y`, `B` of
+/// `EX0B` (and of `EX0B abs`).
+fn located_axis(name: &str) -> Option<&str> {
+    let b = name.as_bytes();
+    (b.len() >= 4 && b[0] == b'E' && b[2] == b'0' && b[3].is_ascii_uppercase()).then(|| &name[3..4])
 }
 
 /// For a component slot whose axis the data move, the orders of a base of `degree`: the lowest

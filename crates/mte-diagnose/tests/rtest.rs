@@ -395,6 +395,17 @@ fn b_axis_squareness_to_y_is_found_with_two_ball_positions() {
         "two positions separate it: {:?}",
         d.findings[0].alternatives
     );
+    // Its evidence: the residuals without it against the angle of B, the fitted tilt over them.
+    let series = d
+        .residual_series
+        .iter()
+        .find(|s| s.finding.as_deref() == Some("EA0B abs"))
+        .expect("the finding's plot");
+    assert_eq!(series.variable, "B");
+    assert!(
+        series.effect.iter().any(|e| e.abs() > 1e-3),
+        "a visible effect"
+    );
     let e = &d.findings[0].estimates[0];
     assert!(
         (e.value - alpha).abs() <= 2.0 * e.uncertainty,

@@ -69,7 +69,7 @@ pub fn run(args: &Args) -> Result<(), CliError> {
 }
 
 /// The evidence of one finding: the residuals of the final model with the finding left out,
-/// against the covariate that exposes it (rotary angles folded to one turn), with the fitted
+/// against the covariate that exposes it (rotary angles of more than a turn folded to one), with the fitted
 /// effect drawn over them; one panel per channel. For unexplained structure, the final residuals
 /// with the dependence the structure test found drawn over them.
 /// In µm (arcsec for angular observations).
@@ -82,13 +82,17 @@ fn residual_svg(d: &Diagnosis, index: usize) -> String {
         _ if rotary => (180.0 / std::f64::consts::PI, "deg"),
         _ => (1.0, "mm"),
     };
-    let xs: Vec<f64> =
-        s.x.iter()
-            .map(|x| {
-                let v = x * x_scale;
-                if rotary { v.rem_euclid(360.0) } else { v }
-            })
-            .collect();
+    let mut xs: Vec<f64> = s.x.iter().map(|x| x * x_scale).collect();
+    // Angles of more than one turn folded to one (a tilting axis' −90° to 90° stays as it is).
+    let (lo, hi) = xs
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), &x| {
+            (l.min(x), h.max(x))
+        });
+    let folded = rotary && hi - lo > 360.0 + 1e-9;
+    if folded {
+        xs.iter_mut().for_each(|v| *v = v.rem_euclid(360.0));
+    }
     let (y_scale, y_desc) = match d.quantity {
         Quantity::Angle => (180.0 / std::f64::consts::PI * 3600.0, "residual (arcsec)"),
         _ => (1e3, "residual (µm)"),
@@ -139,7 +143,7 @@ fn residual_svg(d: &Diagnosis, index: usize) -> String {
                 .y_label_area_size(60)
                 .build_cartesian_2d(x_lo..x_hi, y_lo..y_hi);
             let Ok(mut chart) = chart else { continue };
-            let x_desc = match (x_unit.is_empty(), rotary) {
+            let x_desc = match (x_unit.is_empty(), folded) {
                 (true, _) => s.variable.clone(),
                 (false, true) => format!("{} ({x_unit}, one turn)", s.variable),
                 (false, false) => format!("{} ({x_unit})", s.variable),
@@ -151,14 +155,12 @@ fn residual_svg(d: &Diagnosis, index: usize) -> String {
                     .map(|i| (xs[i], values[i]))
                     .collect()
             };
-            let residual_style = RGBColor(120, 140, 170)
-                .mix(if dense { 0.3 } else { 0.5 })
-                .filled();
+            let residual_style = RGBColor(90, 110, 150).mix(0.45).filled();
             let effect_style = RGBColor(210, 30, 20).stroke_width(2);
             let _ = chart.draw_series(
                 points(&residual)
                     .into_iter()
-                    .map(|p| Circle::new(p, if dense { 1 } else { 2 }, residual_style)),
+                    .map(|p| Circle::new(p, 2, residual_style)),
             );
             if dense {
                 let _ = chart.draw_series(
