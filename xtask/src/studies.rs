@@ -1273,9 +1273,11 @@ move only along the ball's path, so their component errors and the rotary error 
 almost any function of the angles): with the hidden B tilt's or squareness's own errors left out \
 it still fits such datasets to the noise, and those cells show what an R-test can tell a user of \
 the full model about them: nothing. An R-test finds a B tilt against the location-only model of \
-R-test practice (`tests/rtest.rs` in mte-diagnose). On 3-D points the full model is not \
-degenerate that way, but it has no squareness a point grid could show apart from the yaw of an \
-axis (its lever arm to the target) and the instrument's pose: its power cell is C's angular \
+R-test practice (`tests/rtest.rs` in mte-diagnose). On 3-D points and tracker lengths the full \
+model is not degenerate that way, but with one target it has no squareness the data could show \
+apart from an axis' yaw growing along it (through the target's lever arm) and the instrument's \
+pose or the stations (the report lists `EC0X` and `EC0Y` as not separable; the tracker test \
+finds a squareness against the stations-only model, `tests/tracker.rs`): the points' power cell is C's angular \
 positioning, against the model without `ECC`, which lacks C's ordinary error motion about Z \
 too (harmonics 1–3 of a turn, a few µrad): findings of those harmonics name `ECC` as well.\n",
         r.command, r.base_seed

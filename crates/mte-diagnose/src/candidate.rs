@@ -1043,8 +1043,8 @@ fn component_axis(slot: &SlotEffect) -> Option<String> {
 /// The axis of a location or squareness error by its ISO 230-1 name: `Y` of `EC0Y`, `B` of
 /// `EX0B` (and of `EX0B abs`).
 fn located_axis(name: &str) -> Option<&str> {
-    let b = name.as_bytes();
-    (b.len() >= 4 && b[0] == b'E' && b[2] == b'0' && b[3].is_ascii_uppercase()).then(|| &name[3..4])
+    let relative = crate::instruments::relative_form(name).unwrap_or(name);
+    mte_errors::catalogue::parse_location_error_name(relative).map(|(_, axis)| axis)
 }
 
 /// For a component slot whose axis the data move, the orders of a base of `degree`: the lowest

@@ -4427,27 +4427,24 @@ fn separating_hint(chosen: &Term, alternatives: &[String], pool: &[Vec<Term>]) -
     (!hints.is_empty()).then(|| hints.join("; or "))
 }
 
-/// How much a term asks of the data: coefficients first, then hyper-parameters and
-/// dependence on time or polynomial degree (a constant location error is simpler than a drift
-/// that happens to look constant).
 /// Whether `name` is the squareness of the same plane as the squareness `t`, in the axis
 /// ISO 230-1 names it by where `t` is not: the later axis of the plane (X, Y, Z order) against
 /// the earlier one — `EC0Y` for `EC0X` (Y against X), `EB0Z` for `EB0X`, `EA0Z` for `EA0Y`.
 fn is_iso_squareness_of(name: &str, t: &Term) -> bool {
-    let later = |n: &str| -> Option<bool> {
-        let &[b'E', r, b'0', a] = n.as_bytes() else {
-            return None;
-        };
-        let about = b"ABC".iter().position(|&c| c == r)?;
-        let axis = b"XYZ".iter().position(|&c| c == a)?;
-        (axis != about).then(|| axis > 3 - about - axis)
+    // (The rotation's index, and whether the axis is the plane's later one.)
+    let later = |n: &str| -> Option<(usize, bool)> {
+        let (c, axis) = mte_errors::catalogue::parse_location_error_name(n)?;
+        let about = c.index().checked_sub(3)?;
+        let axis = ["X", "Y", "Z"].iter().position(|&a| a == axis)?;
+        (axis != about).then_some((about, axis > 3 - about - axis))
     };
     t.family == Family::Squareness
-        && name.get(..3) == t.name.get(..3)
-        && later(&t.name) == Some(false)
-        && later(name) == Some(true)
+        && matches!((later(&t.name), later(name)), (Some((a, false)), Some((b, true))) if a == b)
 }
 
+/// How much a term asks of the data: coefficients first, then hyper-parameters and
+/// dependence on time or polynomial degree (a constant location error is simpler than a drift
+/// that happens to look constant).
 fn complexity(t: &Term) -> (usize, usize) {
     let shape = match t.family {
         Family::Component { degree } => degree,
