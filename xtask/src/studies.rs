@@ -102,8 +102,12 @@ pub fn dataset_seed(base_seed: u64, cell: &str, index: usize) -> u64 {
     z ^ (z >> 31)
 }
 
+/// A directory of its own for each cell run (cells run side by side in the tests: one that
+/// removed a shared directory as it finished would pull it from under another's next dataset).
 fn work_dir() -> PathBuf {
-    std::env::temp_dir().join(format!("mte-studies-{}", std::process::id()))
+    static RUNS: AtomicUsize = AtomicUsize::new(0);
+    let run = RUNS.fetch_add(1, Ordering::Relaxed);
+    std::env::temp_dir().join(format!("mte-studies-{}-{run}", std::process::id()))
 }
 
 /// Writes the dataset of `spec` drawn from `seed` under `work`, diagnoses it and records the

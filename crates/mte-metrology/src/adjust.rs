@@ -903,8 +903,9 @@ pub fn adjust(net: &Network, params: &AdjustParams) -> Result<Adjustment> {
     let n = net.targets.len();
     let center: Vec3 = net.targets.iter().map(|t| t.nominal_mm).sum::<Vec3>() / n as f64;
     let rows = datum_rows(&params.datum, net, &center)?;
-    let mut q: Vec<Vec3> = net.stations.iter().map(|s| s.position_mm).collect();
-    let mut d: Vec<f64> = net.stations.iter().map(|s| s.dead_path_mm).collect();
+    let (mut q, mut d): (Vec<Vec3>, Vec<f64>) = (0..net.stations.len())
+        .map(|i| start_values(net, i))
+        .unzip();
     let mut p: Vec<Vec3> = net.targets.iter().map(|t| t.nominal_mm).collect();
     let mut iterations = 0;
     let mut last = f64::INFINITY;
@@ -988,6 +989,88 @@ pub fn adjust(net: &Network, params: &AdjustParams) -> Result<Adjustment> {
         p,
         iterations,
     )
+}
+
+/// Start values of station `i`: its stated position and dead path, or those its lengths give in
+/// closed form with the targets at their nominal places ([`closed_form_station`]), whichever
+/// fits its lengths better. A station placed roughly (half a metre off) would otherwise start
+/// Gauss–Newton where the linearised geometry is wrong enough to diverge.
+fn start_values(net: &Network, i: usize) -> (Vec3, f64) {
+    let station = &net.stations[i];
+    let stated = (station.position_mm, station.dead_path_mm);
+    let misfit = |(q, d): (Vec3, f64)| -> f64 {
+        net.observations
+            .iter()
+            .filter(|o| o.station == i)
+            .map(|o| {
+                let r = o.length_mm - ((q - net.targets[o.target].nominal_mm).norm() - d);
+                (r / o.sigma_mm).powi(2)
+            })
+            .sum()
+    };
+    match closed_form_station(net, i) {
+        Some(closed) if misfit(closed) < misfit(stated) => closed,
+        _ => stated,
+    }
+}
+
+/// Station `i`'s position and dead path from its lengths alone, the targets at their nominal
+/// positions P_j: squaring |Q − P_j| = ℓ_j + d gives, with w = |Q|² − d², equations linear in
+/// (Q, d, w), −2 P_j·Q − 2 ℓ_j d + w = ℓ_j² − |P_j|² (with a fixed dead path d is known and w =
+/// |Q|²), solved by least squares about the targets' centroid. `None` where the targets cannot
+/// place the station: too few, or in a plane (the station's mirror image fits as well).
+fn closed_form_station(net: &Network, i: usize) -> Option<(Vec3, f64)> {
+    let free = net.stations[i].dead_path == DeadPath::Free;
+    let obs: Vec<_> = net.observations.iter().filter(|o| o.station == i).collect();
+    let unknowns = if free { 5 } else { 4 };
+    if obs.len() < unknowns + 1 {
+        return None;
+    }
+    let c = obs
+        .iter()
+        .map(|o| net.targets[o.target].nominal_mm)
+        .sum::<Vec3>()
+        / obs.len() as f64;
+    // Lengths and positions in units of the targets' spread, for a well-scaled system.
+    let spread = (obs
+        .iter()
+        .map(|o| (net.targets[o.target].nominal_mm - c).norm_squared())
+        .sum::<f64>()
+        / obs.len() as f64)
+        .sqrt();
+    if spread.is_nan() || spread <= 0.0 {
+        return None;
+    }
+    let d0 = net.stations[i].dead_path_mm / spread;
+    let mut a = DMatrix::<f64>::zeros(obs.len(), unknowns);
+    let mut b = DVector::<f64>::zeros(obs.len());
+    for (r, o) in obs.iter().enumerate() {
+        let pj = (net.targets[o.target].nominal_mm - c) / spread;
+        let l = o.length_mm / spread;
+        for k in 0..3 {
+            a[(r, k)] = -2.0 * pj[k];
+        }
+        a[(r, 3)] = 1.0;
+        if free {
+            a[(r, 4)] = -2.0 * l;
+            b[r] = l * l - pj.norm_squared();
+        } else {
+            b[r] = (l + d0).powi(2) - pj.norm_squared();
+        }
+    }
+    let svd = a.svd(true, true);
+    let largest = svd.singular_values.max();
+    if svd.singular_values.min() < 1e-9 * largest {
+        return None;
+    }
+    let x = svd.solve(&b, 0.0).ok()?;
+    let q = Vec3::new(x[0], x[1], x[2]) * spread + c;
+    let d = if free {
+        x[4] * spread
+    } else {
+        net.stations[i].dead_path_mm
+    };
+    (q.iter().all(|v| v.is_finite()) && d.is_finite()).then_some((q, d))
 }
 
 #[allow(clippy::too_many_arguments)]

@@ -413,3 +413,31 @@ fn scale_95_is_the_chi2_quantile() {
         "{q}"
     );
 }
+
+#[test]
+fn stations_placed_roughly_converge_to_the_same_adjustment() {
+    // A user's approximate station positions half a metre to a metre off, dead paths unknown
+    // (0): the adjustment starts from the stations the lengths give in closed form and lands
+    // where it lands from good start values.
+    let (net, _) = sim(StationLayout::Six, true, 5, 20.0);
+    let good = adjust(&net, &AdjustParams::default()).unwrap();
+    let mut rough = net.clone();
+    for (i, s) in rough.stations.iter_mut().enumerate() {
+        let k = i as f64;
+        s.position_mm += Vec3::new(800.0 - 300.0 * k, 600.0 * (k % 2.0) - 300.0, 500.0);
+        s.dead_path_mm = 0.0;
+    }
+    let from_rough = adjust(&rough, &AdjustParams::default()).unwrap();
+    for (a, b) in good.targets.iter().zip(&from_rough.targets) {
+        assert!(
+            (a.position_mm - b.position_mm).amax() < 1e-9,
+            "{} {}",
+            a.id,
+            b.id
+        );
+    }
+    for (a, b) in good.stations.iter().zip(&from_rough.stations) {
+        assert!((a.position_mm - b.position_mm).amax() < 1e-6);
+        assert!((a.dead_path_mm - b.dead_path_mm).abs() < 1e-6);
+    }
+}
