@@ -352,6 +352,35 @@ fn a_pitch_a_reversal_and_a_drift_at_once_are_each_named_and_nothing_else() {
 }
 
 #[test]
+fn two_pivot_drifts_at_once_are_each_named_or_said_to_be_inseparable() {
+    // The B and the C line both drift in X, each with its own time constant and sign. The lines
+    // drifting the same way are, at first sight, the tool drifting the other way: the search's
+    // exchange must put the pivots back where the tool stood in for them, and where the data
+    // cannot tell the two apart the report must say so (a finding's alternatives).
+    let (kind, effects) = studies::combined_plan()
+        .into_iter()
+        .find(|c| c.0 == Kind::Rtest)
+        .expect("an R-test cell");
+    let c = studies::combined(
+        kind,
+        &effects,
+        8,
+        SEED,
+        &xtask::realistic::BaseModel::Default,
+    );
+    assert_eq!(c.errors, 0);
+    assert_eq!(
+        c.effects_named + c.effects_as_alternative,
+        2 * c.n,
+        "{}: {:?}",
+        c.label(),
+        c.names
+    );
+    assert!(c.all_named + 2 >= c.n, "{}: {:?}", c.label(), c.names);
+    assert_eq!(c.no_other, c.n, "{}: {:?}", c.label(), c.names);
+}
+
+#[test]
 fn c_angular_positioning_on_3d_points_is_named_and_sized() {
     // 3-D points of a C table against the user's model without C's angular positioning (ECC):
     // the hidden harmonic and C's ordinary error motion about Z (harmonics 1–3 of a turn) are

@@ -360,6 +360,19 @@ pub struct CandidateScore {
     pub cv_rms: Option<f64>,
 }
 
+/// A cause the search had chosen, replaced once the model was complete by one that, with the
+/// other causes fitted, explains the data better ([`Diagnosis::exchanged`]).
+#[derive(Debug, Clone, Serialize)]
+pub struct Exchange {
+    /// The cause chosen when it entered.
+    pub replaced: String,
+    /// The cause that took its place.
+    pub by: String,
+    /// How much lower the complete model's χ² is with the replacement (in units of the model's
+    /// residual variance).
+    pub chi2_drop: f64,
+}
+
 /// One step of the search.
 #[derive(Debug, Clone, Serialize)]
 pub struct Step {
@@ -468,6 +481,9 @@ pub struct Diagnosis {
     /// Findings that together describe one effect of a form no candidate has (also in
     /// [`Diagnosis::notes`]): the cause is named, its shape is not one of the library's.
     pub compound: Vec<Compound>,
+    /// Causes the search chose and replaced in the complete model by a rival that explains the
+    /// data better with the others fitted.
+    pub exchanged: Vec<Exchange>,
     /// Causes added by the search and removed again when re-tested in the complete model.
     pub pruned: Vec<String>,
     /// Candidates the data cannot separate from the model.
@@ -1150,6 +1166,7 @@ fn conclude(
         steps: search.steps,
         findings,
         compound,
+        exchanged: search.exchanged,
         pruned,
         not_separable,
         detection_limits: search.detection_limits,
@@ -1806,6 +1823,7 @@ struct SearchResult {
     steps: Vec<Step>,
     not_separable: Vec<NotSeparable>,
     detection_limits: Vec<DetectionLimit>,
+    exchanged: Vec<Exchange>,
     pruned: Vec<String>,
     hit_limit: bool,
     /// A periodic cause that already had its most components ([`most_periodic_components`])
@@ -2453,17 +2471,23 @@ impl Searcher<'_> {
             x = design(&terms.iter().collect::<Vec<_>>(), obs.len());
         };
         let base: Vec<Term> = self.base.iter().chain(&late).cloned().collect();
-        let pruned = Searcher {
+        let complete = Searcher {
             base: &base,
             ..*self
-        }
-        .prune(&mut chosen, folds, base_fit, last);
+        };
+        let exchanged = complete.exchange(&mut chosen, &steps, base_fit, &last.1);
+        let last = match exchanged.is_empty() {
+            true => last,
+            false => complete.fit_of(base_fit, &complete.with(&chosen, None)),
+        };
+        let pruned = complete.prune(&mut chosen, folds, base_fit, last);
         SearchResult {
             completed: late,
             chosen,
             steps,
             not_separable,
             detection_limits,
+            exchanged,
             pruned,
             hit_limit,
             capped: capped_significant,
@@ -2704,6 +2728,121 @@ impl Searcher<'_> {
             }
             chosen[j].term = nth_component(refined, chosen[j].component);
         }
+    }
+
+    /// Exchange (the replacement step of stepwise selection), once the search has chosen two
+    /// causes or more: each is tried against the causes of its family (a drift against drifts,
+    /// a location error against location errors) that competed in the search's steps (their
+    /// shortlists), each at its best time constant or form, the other chosen causes' chosen
+    /// again beside it. One that leaves the complete model's χ² lower by more than
+    /// [`EXCHANGE_CHI2`], with no more coefficients, takes its place. Entry by entry, the search
+    /// takes the cause that best explains the residuals alone: the lines of B and C drifting in
+    /// X the same way first look like the tool drifting, and with that in the model the second
+    /// line's drift is fitted beside it, though the two lines explain the data and the tool
+    /// does not. Periodic causes (whose components build on each other) and a component error's
+    /// polynomial forms (nested orders of one error) are not exchanged.
+    /// `fit`: the model's fit; returns the exchanges made.
+    fn exchange(
+        &self,
+        chosen: &mut Vec<Chosen>,
+        steps: &[Step],
+        base_fit: &Projector,
+        fit: &Projector,
+    ) -> Vec<Exchange> {
+        let mut exchanged = Vec::new();
+        if chosen.len() < 2 {
+            return exchanged;
+        }
+        // (A periodic cause's components build on each other; a component error's forms are
+        // nested orders of one error.)
+        let recurs =
+            |t: &Term| matches!(t.family, Family::Periodic { .. } | Family::Component { .. });
+        let same_family =
+            |a: &Family, b: &Family| std::mem::discriminant(a) == std::mem::discriminant(b);
+        let variance = fit.rss_w() / fit.dof().max(1) as f64;
+        let pool = &self.pool.variants;
+        let mut rss = fit.rss_w();
+        for j in 0..chosen.len() {
+            let name = chosen[j].term.name.clone();
+            let required = chosen
+                .iter()
+                .any(|c| self.chosen_candidate(c).requires() == Some(name.as_str()));
+            if recurs(&chosen[j].term) || required {
+                continue;
+            }
+            let in_model = |n: &str| {
+                self.base.iter().any(|t| t.name == n) || chosen.iter().any(|c| c.term.name == n)
+            };
+            let mut rivals: Vec<usize> = steps
+                .iter()
+                .flat_map(|s| &s.ranking)
+                .filter(|r| r.cv_rms.is_some() && !in_model(&r.name))
+                .filter_map(|r| pool.iter().position(|v| v[0].name == r.name))
+                .filter(|&ci| {
+                    same_family(&pool[ci][0].family, &chosen[j].term.family)
+                        && pool[ci][0].width() <= chosen[j].term.width()
+                        && self.candidate(ci).requires() != Some(name.as_str())
+                })
+                .collect();
+            rivals.sort_unstable();
+            rivals.dedup();
+            if rivals.is_empty() {
+                continue;
+            }
+            let projector = self.fit_without(chosen, j, base_fit);
+            let rss_with = |t: &Term| projector.rss_w() - projector.increment(&t.columns).delta_rss;
+            let best = rivals
+                .iter()
+                .filter_map(|&ci| {
+                    let variants = &pool[ci];
+                    let increments =
+                        projector.increments(variants.len(), |v| self.pool.columns(ci, v));
+                    let v = (0..variants.len()).max_by(|&a, &b| {
+                        increments[a].delta_rss.total_cmp(&increments[b].delta_rss)
+                    })?;
+                    let at = self.pool.term(ci, v).into_owned();
+                    let term = self
+                        .candidate(ci)
+                        .refine(v, &Score::new(rss_with))
+                        .filter(|r| rss_with(r) < rss_with(&at))
+                        .unwrap_or(at);
+                    let mut trial = chosen.clone();
+                    let c = &mut trial[j];
+                    (c.term, c.candidate, c.variant, c.component) =
+                        (term, self.pool.source[ci], v, 0);
+                    // The others' time constants chosen again beside it (over their grids: the
+                    // value a cause took beside the one replaced need not be near its best
+                    // now), then its own.
+                    for k in (0..trial.len()).filter(|&k| k != j).chain([j]) {
+                        self.rechoose(&mut trial, k, base_fit);
+                    }
+                    let (_, trial_fit) = self.fit_of(base_fit, &self.with(&trial, None));
+                    Some((trial_fit.rss_w(), trial))
+                })
+                .min_by(|a, b| a.0.total_cmp(&b.0));
+            let Some((trial_rss, mut trial)) =
+                best.filter(|b| b.0 < rss - EXCHANGE_CHI2 * variance)
+            else {
+                continue;
+            };
+            let before = &chosen[j].term;
+            let old = projector.residual_part(&before.columns);
+            let new = projector.residual_part(&trial[j].term.columns);
+            let c = &mut trial[j];
+            c.alternatives.retain(|a| *a != c.term.name);
+            if max_cosine(&new, &old) > 0.99 {
+                c.alternatives.insert(0, before.name.clone());
+            }
+            c.separated_by = separating_hint(&c.term, &c.alternatives, pool);
+            exchanged.push(Exchange {
+                replaced: before.name.clone(),
+                by: c.term.name.clone(),
+                chi2_drop: (rss - trial_rss) / variance,
+            });
+            rss = trial_rss;
+            *chosen = trial;
+        }
+        exchanged
     }
 
     /// Chooses the period or time constant of chosen term `j` again, over all its candidate's
@@ -4332,6 +4471,11 @@ fn full_variant(candidate: &dyn Candidate, obs: &Observations, c: &Chosen) -> Te
 /// completes the base. Generous: an order too many costs a little power, one too few leaves
 /// smooth structure that would be mistaken for a cause.
 const COMPLETION_LEVEL: f64 = 0.01;
+
+/// How much lower (χ², in units of the model's residual variance) a rival must leave the complete
+/// model than a chosen cause to replace it ([`Searcher::exchange`]): the 99 % point of χ² with one
+/// degree of freedom, so that two causes the data hardly tell apart are not swapped on noise.
+const EXCHANGE_CHI2: f64 = 6.63;
 
 /// How far above the significance level (as a factor) a scanned candidate's best grid value
 /// still gets its hyper-parameter refined.

@@ -293,6 +293,23 @@ pub fn markdown(d: &Diagnosis, title: &str) -> String {
             d.base_completed.join(", ")
         );
     }
+    if !d.exchanged.is_empty() {
+        let swaps: Vec<String> = d
+            .exchanged
+            .iter()
+            .map(|e| {
+                format!(
+                    "{} by {} (χ² lower by {:.1})",
+                    e.replaced, e.by, e.chi2_drop
+                )
+            })
+            .collect();
+        let _ = writeln!(
+            s,
+            "Chosen during the search and replaced once the model was complete by a rival that, with the other causes fitted, explains the data better: {}.\n",
+            swaps.join("; ")
+        );
+    }
     if !d.pruned.is_empty() {
         let _ = writeln!(
             s,
