@@ -325,19 +325,24 @@ fn a_component_held_by_another_leaves_and_the_one_that_stays_is_found_again_alon
     );
 }
 
-#[test]
-fn a_pitch_a_reversal_and_a_drift_at_once_are_each_named_and_nothing_else() {
+/// The combined study's cell of `kind` (several effects at once), on `n` datasets.
+fn combined_cell(kind: Kind, n: usize) -> studies::CombinedCell {
     let (kind, effects) = studies::combined_plan()
         .into_iter()
-        .find(|c| c.0 == Kind::Axis)
-        .expect("an axis cell");
-    let c = studies::combined(
+        .find(|c| c.0 == kind)
+        .expect("a combined cell of the kind");
+    studies::combined(
         kind,
         &effects,
-        6,
+        n,
         SEED,
         &xtask::realistic::BaseModel::Default,
-    );
+    )
+}
+
+#[test]
+fn a_pitch_a_reversal_and_a_drift_at_once_are_each_named_and_nothing_else() {
+    let c = combined_cell(Kind::Axis, 6);
     assert_eq!(c.errors, 0);
     assert_eq!(c.all_named, c.n, "{}: {:?}", c.label(), c.names);
     assert_eq!(c.no_other, c.n, "{}: {:?}", c.label(), c.names);
@@ -357,17 +362,7 @@ fn two_pivot_drifts_at_once_are_each_named_or_said_to_be_inseparable() {
     // drifting the same way are, at first sight, the tool drifting the other way: the search's
     // exchange must put the pivots back where the tool stood in for them, and where the data
     // cannot tell the two apart the report must say so (a finding's alternatives).
-    let (kind, effects) = studies::combined_plan()
-        .into_iter()
-        .find(|c| c.0 == Kind::Rtest)
-        .expect("an R-test cell");
-    let c = studies::combined(
-        kind,
-        &effects,
-        8,
-        SEED,
-        &xtask::realistic::BaseModel::Default,
-    );
+    let c = combined_cell(Kind::Rtest, 8);
     assert_eq!(c.errors, 0);
     assert_eq!(
         c.effects_named + c.effects_as_alternative,
