@@ -2789,35 +2789,29 @@ impl Searcher<'_> {
             if rivals.is_empty() {
                 continue;
             }
-            let projector = self.fit_without(chosen, j, base_fit);
-            let rss_with = |t: &Term| projector.rss_w() - projector.increment(&t.columns).delta_rss;
             let best = rivals
                 .iter()
-                .filter_map(|&ci| {
-                    let variants = &pool[ci];
-                    let increments =
-                        projector.increments(variants.len(), |v| self.pool.columns(ci, v));
-                    let v = (0..variants.len()).max_by(|&a, &b| {
-                        increments[a].delta_rss.total_cmp(&increments[b].delta_rss)
-                    })?;
-                    let at = self.pool.term(ci, v).into_owned();
-                    let term = self
-                        .candidate(ci)
-                        .refine(v, &Score::new(rss_with))
-                        .filter(|r| rss_with(r) < rss_with(&at))
-                        .unwrap_or(at);
+                .map(|&ci| {
                     let mut trial = chosen.clone();
                     let c = &mut trial[j];
-                    (c.term, c.candidate, c.variant, c.component) =
-                        (term, self.pool.source[ci], v, 0);
-                    // The others' time constants chosen again beside it (over their grids: the
-                    // value a cause took beside the one replaced need not be near its best
-                    // now), then its own.
-                    for k in (0..trial.len()).filter(|&k| k != j).chain([j]) {
+                    (c.term, c.candidate, c.variant, c.component) = (
+                        self.pool.term(ci, 0).into_owned(),
+                        self.pool.source[ci],
+                        0,
+                        0,
+                    );
+                    // Its time constant chosen with the others fitted, then theirs beside it
+                    // (over their grids: the value a cause took beside the one replaced need not
+                    // be near its best now), then its own again.
+                    for k in [j]
+                        .into_iter()
+                        .chain((0..trial.len()).filter(|&k| k != j))
+                        .chain([j])
+                    {
                         self.rechoose(&mut trial, k, base_fit);
                     }
                     let (_, trial_fit) = self.fit_of(base_fit, &self.with(&trial, None));
-                    Some((trial_fit.rss_w(), trial))
+                    (trial_fit.rss_w(), trial)
                 })
                 .min_by(|a, b| a.0.total_cmp(&b.0));
             let Some((trial_rss, mut trial)) =
@@ -2826,6 +2820,7 @@ impl Searcher<'_> {
                 continue;
             };
             let before = &chosen[j].term;
+            let projector = self.fit_without(chosen, j, base_fit);
             let old = projector.residual_part(&before.columns);
             let new = projector.residual_part(&trial[j].term.columns);
             let c = &mut trial[j];
