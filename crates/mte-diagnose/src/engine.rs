@@ -2476,9 +2476,10 @@ impl Searcher<'_> {
             ..*self
         };
         let exchanged = complete.exchange(&mut chosen, &steps, base_fit, &last.1);
-        let last = match exchanged.is_empty() {
-            true => last,
-            false => complete.fit_of(base_fit, &complete.with(&chosen, None)),
+        let last = if exchanged.is_empty() {
+            last
+        } else {
+            complete.fit_of(base_fit, &complete.with(&chosen, None))
         };
         let pruned = complete.prune(&mut chosen, folds, base_fit, last);
         SearchResult {
@@ -2777,7 +2778,7 @@ impl Searcher<'_> {
                 .iter()
                 .flat_map(|s| &s.ranking)
                 .filter(|r| r.cv_rms.is_some() && !in_model(&r.name))
-                .filter_map(|r| pool.iter().position(|v| v[0].name == r.name))
+                .filter_map(|r| self.pool.by_name.get(&r.name).copied())
                 .filter(|&ci| {
                     same_family(&pool[ci][0].family, &chosen[j].term.family)
                         && pool[ci][0].width() <= chosen[j].term.width()

@@ -84,11 +84,7 @@ fn residual_svg(d: &Diagnosis, index: usize) -> String {
     };
     let mut xs: Vec<f64> = s.x.iter().map(|x| x * x_scale).collect();
     // Angles of more than one turn folded to one (a tilting axis' −90° to 90° stays as it is).
-    let (lo, hi) = xs
-        .iter()
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), &x| {
-            (l.min(x), h.max(x))
-        });
+    let (lo, hi) = extent(&xs);
     let folded = rotary && hi - lo > 360.0 + 1e-9;
     if folded {
         xs.iter_mut().for_each(|v| *v = v.rem_euclid(360.0));
@@ -181,12 +177,16 @@ fn residual_svg(d: &Diagnosis, index: usize) -> String {
     svg
 }
 
-fn bounds(v: &[f64]) -> (f64, f64) {
-    let (lo, hi) = v
-        .iter()
+/// The smallest and largest of `v` (∞ and −∞ when empty).
+fn extent(v: &[f64]) -> (f64, f64) {
+    v.iter()
         .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), &x| {
             (l.min(x), h.max(x))
-        });
+        })
+}
+
+fn bounds(v: &[f64]) -> (f64, f64) {
+    let (lo, hi) = extent(v);
     if !lo.is_finite() {
         return (-1.0, 1.0);
     }
