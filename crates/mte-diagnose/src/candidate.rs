@@ -457,7 +457,8 @@ pub fn physical_effects(
                 // motion there.
                 let (lo, hi) = crate::basis::range(&values);
                 let full_turn = rotary && hi - lo > 0.8 * std::f64::consts::TAU;
-                for degree in (first..=3).filter(|_| !full_turn) {
+                let top = 3.min(highest_order(&values, false));
+                for degree in (first..=top).filter(|_| !full_turn) {
                     let cols = slot.modulated(&values, &|s| legendre_columns(s, first..=degree));
                     out.push(Box::new(
                         term(
@@ -762,6 +763,10 @@ impl BaseModelSpec {
                 // cycles over the stroke spreads over more orders than a block holds, each block
                 // too little of it to be significant alone.
                 let top = highest_completion_degree(obs, slot);
+                let cap = component_axis(slot)
+                    .and_then(|a| obs.variable(&a))
+                    .map_or(0, |v| highest_order(&v.values, false));
+                let top = top.min(cap);
                 if hi + COMPLETION_BLOCK < top
                     && let Some(cols) = component_columns(obs, slot, hi + 1, top)
                 {
@@ -777,7 +782,12 @@ impl BaseModelSpec {
                 // one at a time would not reveal.
                 let mut after: Option<String> = None;
                 for first in (hi + 1..=MAX_COMPONENT_DEGREE).step_by(COMPLETION_BLOCK) {
-                    let last = (first + COMPLETION_BLOCK - 1).min(MAX_COMPONENT_DEGREE);
+                    let last = (first + COMPLETION_BLOCK - 1)
+                        .min(MAX_COMPONENT_DEGREE)
+                        .min(cap);
+                    if first > last {
+                        break;
+                    }
                     let Some(cols) = component_columns(obs, slot, first, last) else {
                         break;
                     };
@@ -1062,21 +1072,39 @@ fn component_orders(
         return None;
     };
     let v = obs.variable(axis).filter(|v| varies(&v.values))?;
-    if v.kind == VariableKind::RotaryAxis {
-        Some((1, degree.div_ceil(2), true))
+    let rotary = v.kind == VariableKind::RotaryAxis;
+    let top = highest_order(&v.values, rotary);
+    if rotary {
+        Some((1, degree.div_ceil(2).min(top), true))
     } else {
         let lo = if *straightness { 2 } else { 1 };
-        (lo <= degree).then_some((lo, degree, false))
+        let hi = degree.min(top);
+        (lo <= hi).then_some((lo, hi, false))
     }
 }
 
+/// The highest order a function of an axis sampled at `values` can have apart from its lower
+/// orders: at n distinct positions a polynomial of degree n − 1 takes any values, and a higher
+/// degree is a combination of the lower ones — its linear part a squareness or scale, its
+/// constant an offset; over a turn, n distinct angles carry harmonics up to (n − 1) / 2.
+fn highest_order(values: &[f64], rotary: bool) -> usize {
+    let n = crate::basis::distinct_sorted(values)
+        .len()
+        .saturating_sub(1);
+    if rotary { n / 2 } else { n }
+}
+
 /// The effect of a component slot's basis functions of orders `lo..=hi` (Legendre degrees over
-/// the observed range for a linear axis, harmonics of a turn for a rotary one).
+/// the observed range for a linear axis, harmonics of a turn for a rotary one); `None` where
+/// the axis' positions cannot carry order `hi` apart from the lower ones ([`highest_order`]).
 fn component_columns(obs: &Observations, slot: &SlotEffect, lo: usize, hi: usize) -> Option<DMat> {
     let SlotRole::Component { axis, .. } = &slot.role else {
         return None;
     };
     let v = obs.variable(axis)?;
+    if hi > highest_order(&v.values, v.kind == VariableKind::RotaryAxis) {
+        return None;
+    }
     let cols = if v.kind == VariableKind::RotaryAxis {
         slot.modulated(&v.values, &|s| {
             let mut m = DMat::zeros(s.len(), 2 * (hi + 1 - lo));
@@ -1474,6 +1502,16 @@ pub(crate) fn format_period(p: f64, rotary: bool) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn no_order_beyond_what_the_positions_carry_apart_from_the_lower_ones() {
+        // Three distinct positions (repeated): a quadratic takes any values there, a cubic is
+        // a combination of degrees 0–2 (its linear part a scale or squareness).
+        assert_eq!(highest_order(&[0.0, 0.0, 100.0, 200.0, 200.0], false), 2);
+        // Twelve angles over a turn carry harmonics 1–5 apart from each other and a constant.
+        let angles: Vec<f64> = (0..12).map(|k| f64::from(k) * 30f64.to_radians()).collect();
+        assert_eq!(highest_order(&angles, true), 5);
+    }
 
     #[test]
     fn a_drift_acts_since_the_reference_pose_where_the_instrument_was_zeroed() {
