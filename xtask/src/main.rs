@@ -1,7 +1,7 @@
 //! `cargo xtask reproduce [seed000|seed002|seed003|seed004|all] [--check]`,
 //! `cargo xtask reproduce seed003 --timing` (writes `docs/reproduction/seed003-timing.md`) and
 //! `cargo xtask bench [-- criterion args]` and
-//! `cargo xtask study [fdr|power|coverage|combined|openworld|all] [--n N] [--n-power M] [--seed S] [--kind axis|tracker|rtest|rtest-head|points|rotary] [--base-model omit] [--out FILE]`.
+//! `cargo xtask study [fdr|power|coverage|combined|openworld|all] [--n N] [--n-power M] [--seed S] [--kind axis|tracker|tracker-tools|rtest|rtest-head|points|rotary] [--base-model omit] [--out FILE]`.
 //!
 //! The generators are in the library target (`xtask::reproduce`), so the staleness test in
 //! `tests/reproduction_up_to_date.rs` runs the very same code.
@@ -9,18 +9,20 @@
 use std::process::{Command, ExitCode};
 use xtask::reproduce::{self, Freshness, PAPERS};
 
-const USAGE: &str = "usage: cargo xtask <reproduce [seed000|seed002|seed003|seed004|all] [--check] | reproduce seed003 --timing | bench [-- criterion args] | bench-diagnose [--rows N] [--seed S] | study [fdr|power|coverage|combined|openworld|all] [--n N] [--n-power M] [--seed S] [--kind axis|tracker|rtest|rtest-head|points|rotary] [--base-model omit] [--out FILE]>";
+const USAGE: &str = "usage: cargo xtask <reproduce [seed000|seed002|seed003|seed004|all] [--check] | reproduce seed003 --timing | bench [-- criterion args] | bench-diagnose [--rows N] [--seed S] | study [fdr|power|coverage|combined|openworld|all] [--n N] [--n-power M] [--seed S] [--kind axis|tracker|tracker-tools|rtest|rtest-head|points|rotary] [--base-model omit] [--out FILE]>";
 
-/// `cargo xtask realistic <axis|tracker|rtest|rtest-head|points|rotary> <seed> <dir> [--hidden EFFECT SIZE]
+/// `cargo xtask realistic <axis|tracker|tracker-tools|rtest|rtest-head|points|rotary> <seed> <dir> [--hidden EFFECT SIZE]
 /// [--cycles N] [--targets N]`: writes one realistic dataset (every ordinary error) for trying
 /// `mte diagnose` or timing it; clean unless `--hidden` names a study effect (`pitch`,
 /// `sawtooth`, `risefall`, … in the unit of the studies' tables; its other parameters drawn
-/// from the seed), whose truth is then printed — and written nowhere in the dataset.
+/// from the seed), whose truth is then printed — and written nowhere in the dataset; the
+/// manifest's base model is then the studies' user model lacking the effect
+/// ([`xtask::studies::user_model_lacking`]).
 /// `--cycles`: R-test measurement cycles; `--targets`: tracker targets (the benches' sizes:
 /// 8 cycles, 400 targets). `points` writes 3-D points of a C table with a calibrated target
 /// (the bundled `fixtures/datasets/c-stage-points/` is seed 1).
 fn run_realistic(args: &[String]) -> Result<(), String> {
-    const USAGE: &str = "usage: cargo xtask realistic <axis|tracker|rtest|rtest-head|points|rotary> <seed> <dir> [--hidden EFFECT SIZE] [--cycles N] [--targets N]";
+    const USAGE: &str = "usage: cargo xtask realistic <axis|tracker|tracker-tools|rtest|rtest-head|points|rotary> <seed> <dir> [--hidden EFFECT SIZE] [--cycles N] [--targets N]";
     let (positional, options) = args.split_at(args.len().min(3));
     let [kind, seed, dir] = positional else {
         return Err(USAGE.into());
@@ -73,6 +75,7 @@ fn run_realistic(args: &[String]) -> Result<(), String> {
     let seed: u64 = seed.parse().map_err(|e| format!("seed `{seed}`: {e}"))?;
     let dir = std::path::Path::new(dir);
     std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
+    let hidden_effect = hidden;
     let hidden: Vec<_> = hidden
         .map(|(e, size)| {
             use rand::SeedableRng;
@@ -82,6 +85,9 @@ fn run_realistic(args: &[String]) -> Result<(), String> {
         .into_iter()
         .collect();
     let mut spec = xtask::realistic::Spec::new(kind, &hidden);
+    if let Some((effect, _)) = hidden_effect {
+        spec.base_model = xtask::studies::user_model_lacking(kind, effect);
+    }
     spec.cycles = cycles;
     spec.targets = targets;
     let truth = xtask::realistic::write_spec(&spec, seed, dir).map_err(|e| e.to_string())?;

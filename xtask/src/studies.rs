@@ -703,7 +703,9 @@ pub struct PowerCell {
 pub fn user_model_lacking(kind: Kind, effect: Effect) -> BaseModel {
     let except: &[&str] = match effect {
         // (The points and tracker machines have no B.)
-        Effect::Squareness if matches!(kind, Kind::Points | Kind::Tracker) => &["EC0Y", "EC0X"],
+        Effect::Squareness if matches!(kind, Kind::Points | Kind::Tracker | Kind::TrackerTools) => {
+            &["EC0Y", "EC0X"]
+        }
         Effect::Squareness => &["EC0Y", "EC0X", "EC0B"],
         Effect::AngularPositioning => &["ECC"],
         Effect::BTilt => &["EA0B", "EAB", "EA0Y", "EA0Z"],

@@ -35,6 +35,7 @@ fn clean_realistic_machines_rarely_yield_a_discovery() {
     for (kind, n) in [
         (Kind::Axis, 12),
         (Kind::Tracker, 6),
+        (Kind::TrackerTools, 4),
         (Kind::Rtest, 4),
         (Kind::RtestHead, 4),
     ] {

@@ -172,6 +172,53 @@ fn perfect_tracker_lengths_are_station_target_distances() {
 }
 
 #[test]
+fn perfect_tracker_tools_lengths_reach_the_reflector_at_its_offset() {
+    let dir = tmp("tracker-tools-zero");
+    let truth = write_spec(&perfect(Kind::TrackerTools, &[]), 4, &dir).unwrap();
+    let rows = read_csv(&dir.join("targets.csv"));
+    // Every pose with the reflector at the tool tip and at 2–3 offsets 80–200 mm from it.
+    let poses: BTreeMap<String, usize> = rows.iter().fold(BTreeMap::new(), |mut m, r| {
+        *m.entry(r["id"].split('T').next().unwrap().to_string())
+            .or_default() += 1;
+        m
+    });
+    let per_pose = *poses.values().next().unwrap();
+    assert!((3..=4).contains(&per_pose) && poses.values().all(|&n| n == per_pose));
+    let targets: BTreeMap<String, [f64; 3]> = rows
+        .iter()
+        .map(|r| {
+            let o = [
+                num(r, "tool_x_mm"),
+                num(r, "tool_y_mm"),
+                num(r, "tool_z_mm"),
+            ];
+            let reach = o.iter().map(|v| v * v).sum::<f64>().sqrt();
+            assert!(
+                r["id"].ends_with("T1") == (reach == 0.0) && (reach == 0.0 || reach > 80.0),
+                "{r:?}"
+            );
+            (
+                r["id"].clone(),
+                [
+                    num(r, "x_mm") + o[0],
+                    num(r, "y_mm") + o[1],
+                    num(r, "z_mm") + o[2],
+                ],
+            )
+        })
+        .collect();
+    let lengths = read_csv(&dir.join("lengths.csv"));
+    assert_eq!(lengths.len(), truth.n_observations);
+    for r in &lengths {
+        let j: usize = r["station"][1..].parse().unwrap();
+        let (st, dead) = truth.stations[j - 1];
+        let p = targets[&r["target"]];
+        let d = ((st[0] - p[0]).powi(2) + (st[1] - p[1]).powi(2) + (st[2] - p[2]).powi(2)).sqrt();
+        assert_abs_diff_eq!(num(r, "length_mm"), d - dead, epsilon = PRINT_MM);
+    }
+}
+
+#[test]
 fn tracker_length_scale_multiplies_the_distances() {
     let dir = tmp("tracker-scale");
     let truth = write_spec(
@@ -321,7 +368,7 @@ fn generators_are_deterministic_and_hide_the_truth() {
     for kind in Kind::ALL {
         let hidden: Vec<Hidden> = match kind {
             Kind::Axis => vec![Hidden::RiseFall { um: 2.0, peak: 0.5 }],
-            Kind::Tracker => vec![Hidden::Pitch {
+            Kind::Tracker | Kind::TrackerTools => vec![Hidden::Pitch {
                 axis: 0,
                 amplitude_um: 2.0,
                 period_mm: 20.0,

@@ -22,12 +22,23 @@ struct Hidden {
     xy_squareness: f64,
     /// Relative scale error of every tracker length.
     length_scale: f64,
+    /// Angular errors growing linearly through the middle of the travel (rad per mm): the yaw
+    /// of X about Z (ECX) and the pitch of Z about X (EAZ).
+    angular: (f64, f64),
+    /// The reflector's offsets from the tool tip (tool frame, mm) each pose is measured with;
+    /// empty: the tool tip only, no offset columns.
+    tools: &'static [[f64; 3]],
+    /// The manifest's `base_model` (JSON), if any.
+    base_model: Option<&'static str>,
 }
 
 const NONE: Hidden = Hidden {
     x_pitch: None,
     xy_squareness: 0.0,
     length_scale: 0.0,
+    angular: (0.0, 0.0),
+    tools: &[],
+    base_model: None,
 };
 
 fn write_dataset(name: &str, hidden: &Hidden, seed: u64) -> PathBuf {
@@ -48,26 +59,47 @@ fn write_dataset(name: &str, hidden: &Hidden, seed: u64) -> PathBuf {
     ];
     let x_slot = machine.slot_index_by_name("X.motion.dx").unwrap();
     let y_slot = machine.slot_index_by_name("Y.motion.dx").unwrap();
-    let mut targets = String::from("id,x_mm,y_mm,z_mm\n");
+    let ecx = machine.slot_index_by_name("X.motion.ez").unwrap();
+    let eaz = machine.slot_index_by_name("Z.motion.ex").unwrap();
+    let tools: Vec<[f64; 3]> = match hidden.tools {
+        [] => vec![[0.0; 3]],
+        t => t.to_vec(),
+    };
+    let mut targets = String::from(if hidden.tools.is_empty() {
+        "id,x_mm,y_mm,z_mm\n"
+    } else {
+        "id,x_mm,y_mm,z_mm,tool_x_mm,tool_y_mm,tool_z_mm\n"
+    });
     let mut lengths = String::from("station,target,length_mm\n");
     let mut k = 0;
     for z in [-600.0, -100.0] {
         for y in [-500.0, -250.0, 0.0] {
             for i in 0..=28 {
                 let x = 25.0 * i as f64;
-                k += 1;
-                let id = format!("P{k}");
-                targets.push_str(&format!("{id},{x},{y},{z}\n"));
                 let mut e = vec![0.0; n_slots];
                 if let Some((amp, period)) = hidden.x_pitch {
                     e[x_slot] += amp * (std::f64::consts::TAU * x / period + 0.3).sin();
                 }
                 e[y_slot] += hidden.xy_squareness * y;
-                let p = machine.tool_in_workpiece(&[x, y, z], &e).translation.vector;
-                for (sid, q, dead) in &stations {
-                    let l = (1.0 + hidden.length_scale) * (q - p).norm() - dead
-                        + noise.sample(&mut rng);
-                    lengths.push_str(&format!("{sid},{id},{l:.7}\n"));
+                e[ecx] += hidden.angular.0 * (x - 350.0);
+                e[eaz] += hidden.angular.1 * (z + 350.0);
+                // The exact pose with these errors; a reflector at `o` in the tool frame.
+                let pose = machine.tool_in_workpiece(&[x, y, z], &e);
+                for o in &tools {
+                    k += 1;
+                    let id = format!("P{k}");
+                    if hidden.tools.is_empty() {
+                        targets.push_str(&format!("{id},{x},{y},{z}\n"));
+                    } else {
+                        let [ox, oy, oz] = o;
+                        targets.push_str(&format!("{id},{x},{y},{z},{ox},{oy},{oz}\n"));
+                    }
+                    let p = pose.transform_point(&Vec3::from(*o).into()).coords;
+                    for (sid, q, dead) in &stations {
+                        let l = (1.0 + hidden.length_scale) * (q - p).norm() - dead
+                            + noise.sample(&mut rng);
+                        lengths.push_str(&format!("{sid},{id},{l:.7}\n"));
+                    }
                 }
             }
         }
@@ -86,8 +118,11 @@ fn write_dataset(name: &str, hidden: &Hidden, seed: u64) -> PathBuf {
             )
         })
         .collect();
+    let base = hidden
+        .base_model
+        .map_or(String::new(), |b| format!(r#", "base_model": {b}"#));
     let manifest = format!(
-        r#"{{"format": "mte-dataset/1", "kind": "tracker", "machine": "seed004-3axis", "noise_um": {NOISE_UM}, "data": "lengths.csv", "targets": "targets.csv", "setups": [{}]}}"#,
+        r#"{{"format": "mte-dataset/1", "kind": "tracker", "machine": "seed004-3axis", "noise_um": {NOISE_UM}, "data": "lengths.csv", "targets": "targets.csv", "setups": [{}]{base}}}"#,
         setups.join(", ")
     );
     let path = dir.join("manifest.json");
@@ -180,4 +215,50 @@ fn tracker_length_scale_is_found() {
     assert_eq!(f.name, "tracker scale", "{}", report(&d));
     let e = &f.estimates[0];
     assert!((e.value - scale).abs() <= 2.0 * e.uncertainty, "{}", e.text);
+}
+
+/// A volumetric model (every component error as a cubic, no squareness) on a machine whose X
+/// yaws and whose Z pitches along their travel, with an X–Y squareness: through the tool tip
+/// alone the yaw of X times its lever arm, with the stations, holds the squareness (the report
+/// says so); with the reflector at several offsets from the tool tip the tool's angular errors
+/// show apart and the squareness is named and sized.
+#[test]
+fn tool_offsets_separate_a_squareness_from_the_axes_angular_errors() {
+    const BASE: &str = r#"{"components": {"degree": 3}}"#;
+    let theta = 30e-6;
+    let hidden = Hidden {
+        xy_squareness: theta,
+        angular: (40e-6 / 350.0, 25e-6 / 250.0),
+        base_model: Some(BASE),
+        ..NONE
+    };
+    let d = run(&write_dataset("tip-only", &hidden, 35));
+    assert!(
+        d.findings.iter().all(|f| f.family != Family::Squareness),
+        "{}",
+        report(&d)
+    );
+    assert!(
+        d.not_separable.iter().any(|n| n.name == "EC0Y"),
+        "{}",
+        report(&d)
+    );
+    let d = run(&write_dataset(
+        "tools",
+        &Hidden {
+            tools: &[
+                [0.0, 0.0, 0.0],
+                [150.0, 5.0, 0.0],
+                [-3.0, -140.0, 2.0],
+                [4.0, 2.0, -120.0],
+            ],
+            ..hidden
+        },
+        35,
+    ));
+    assert_eq!(d.findings.len(), 1, "{}", report(&d));
+    let f = &d.findings[0];
+    assert_eq!(f.name, "EC0Y", "{}", report(&d));
+    let e = &f.estimates[0];
+    assert!((e.value + theta).abs() <= 2.0 * e.uncertainty, "{}", e.text);
 }

@@ -40,6 +40,9 @@ pub enum Kind {
     /// Laser-tracker multilateration of a three-axis machine (`mte-dataset/1`,
     /// `"kind": "tracker"`), machine file written beside the manifest.
     Tracker,
+    /// [`Kind::Tracker`] with every pose measured with the reflector at 3–4 offsets from the
+    /// tool tip, stated in the targets table (a volumetric calibration's tool offsets).
+    TrackerTools,
     /// ISO 10791-6 R-test of a B/C trunnion (table–table) five-axis machine (`mte-rtest/1`).
     Rtest,
     /// ISO 10791-6 R-test of a head–table five-axis machine: B swivel head, C table
@@ -55,20 +58,23 @@ pub enum Kind {
 
 impl Kind {
     /// All kinds.
-    pub const ALL: [Kind; 6] = [
+    pub const ALL: [Kind; 7] = [
         Kind::Axis,
         Kind::Tracker,
+        Kind::TrackerTools,
         Kind::Rtest,
         Kind::RtestHead,
         Kind::Points,
         Kind::Rotary,
     ];
 
-    /// Lower-case name (`axis`, `tracker`, `rtest`, `rtest-head`, `points`, `rotary`).
+    /// Lower-case name (`axis`, `tracker`, `tracker-tools`, `rtest`, `rtest-head`, `points`,
+    /// `rotary`).
     pub fn name(self) -> &'static str {
         match self {
             Kind::Axis => "axis",
             Kind::Tracker => "tracker",
+            Kind::TrackerTools => "tracker-tools",
             Kind::Rtest => "rtest",
             Kind::RtestHead => "rtest-head",
             Kind::Points => "points",
@@ -364,7 +370,7 @@ pub fn write_spec(spec: &Spec, seed: u64, dir: &Path) -> std::io::Result<Truth> 
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     match spec.kind {
         Kind::Axis => axis::write(spec, &mut rng, dir),
-        Kind::Tracker => tracker::write(spec, &mut rng, dir),
+        Kind::Tracker | Kind::TrackerTools => tracker::write(spec, &mut rng, dir),
         Kind::Rtest | Kind::RtestHead => rtest::write(spec, &mut rng, dir),
         Kind::Points => points::write(spec, &mut rng, dir),
         Kind::Rotary => rotary::write(spec, &mut rng, dir),

@@ -7,6 +7,10 @@
 //! transform `Trans(δ(q))·Rot(ε(q))` of its six component errors, the Y and Z motions run along
 //! directions tilted by the squareness errors, and the angular errors act through the offsets
 //! of the axis stack and the tool (Abbe offsets).
+//!
+//! `tracker-tools` datasets measure every pose with the reflector at 3–4 offsets from the tool
+//! tip (the tool tip itself, one across in X, one across in Y, one further down the tool), as
+//! a volumetric calibration does to see the tool's angular errors apart from its translations.
 
 use std::f64::consts::TAU;
 use std::fmt::Write as _;
@@ -121,9 +125,15 @@ impl TrackerMachine {
 
     /// The actual tool tip in the workpiece frame (mm); ideally `(X, Y, Z)`.
     pub fn tip(&self, q: [f64; 3]) -> V3 {
+        self.reflector(q, V3::zeros())
+    }
+
+    /// The actual place of a reflector at `offset` from the tool tip (tool frame, mm) in the
+    /// workpiece frame; ideally `(X, Y, Z) + offset`.
+    pub fn reflector(&self, q: [f64; 3], offset: V3) -> V3 {
         let mut p = (self.workpiece_in_bed(q).inverse() * self.tool_in_bed(q))
-            .translation
-            .vector;
+            .transform_point(&offset.into())
+            .coords;
         if let Some(e) = &self.two_axis {
             p.y += e.at(q[0], q[1], self.strokes[1]);
         }
@@ -182,6 +192,29 @@ fn draw_stations(rng: &mut impl Rng, strokes: [(f64, f64); 3]) -> Vec<V3> {
             V3::new(c.x + r * phi.cos(), c.y + r * phi.sin(), z)
         })
         .collect()
+}
+
+/// The reflector's offsets from the tool tip (tool frame, mm): the tip itself only, or for
+/// `tracker-tools` 3–4 offsets — across in X, across in Y and (with four) further down the
+/// tool, each 80–200 mm with a few mm to the sides, to 0.1 mm as a calibrated holder states them.
+fn draw_tool_offsets(rng: &mut impl Rng, kind: Kind) -> Vec<V3> {
+    let mut offsets = vec![V3::zeros()];
+    if kind != Kind::TrackerTools {
+        return offsets;
+    }
+    let round = |v: f64| (v * 10.0).round() / 10.0;
+    let n = rng.random_range(3..=4);
+    for k in [0, 1, 2].into_iter().take(n - 1) {
+        let mut o = V3::from_fn(|_, _| round(rng.random_range(-10.0..=10.0)));
+        let reach = round(rng.random_range(80.0..=200.0));
+        o[k] = match k {
+            2 => -reach,
+            _ if rng.random_bool(0.5) => reach,
+            _ => -reach,
+        };
+        offsets.push(o);
+    }
+    offsets
 }
 
 /// Targets: a random grid or uniform random points in the box of the strokes (`count` of them
@@ -311,7 +344,7 @@ pub(crate) fn write(spec: &Spec, rng: &mut ChaCha8Rng, dir: &Path) -> std::io::R
                 m.two_axis = Some(e);
                 effects.push(truth);
             }
-            _ => return Err(unsupported(Kind::Tracker, h)),
+            _ => return Err(unsupported(spec.kind, h)),
         }
     }
     for e in &mut effects {
@@ -343,21 +376,44 @@ pub(crate) fn write(spec: &Spec, rng: &mut ChaCha8Rng, dir: &Path) -> std::io::R
         .map(|_| rng.random_range(80.0..=150.0))
         .collect();
     let targets = draw_targets(rng, strokes, spec.targets);
+    let offsets = draw_tool_offsets(rng, spec.kind);
     let noise = Normal::new(0.0, (sigma * 1e-3).max(1e-300)).expect("finite σ");
-    let mut targets_csv = String::from("id,x_mm,y_mm,z_mm\n");
+    let mut targets_csv = String::from(if offsets.len() > 1 {
+        "id,x_mm,y_mm,z_mm,tool_x_mm,tool_y_mm,tool_z_mm\n"
+    } else {
+        "id,x_mm,y_mm,z_mm\n"
+    });
     let mut lengths = String::from("station,target,length_mm\n");
     let mut n_obs = 0;
     for (i, q) in targets.iter().enumerate() {
-        let id = format!("P{}", i + 1);
-        let _ = writeln!(targets_csv, "{id},{},{},{}", q[0], q[1], q[2]);
-        let p = m.tip(*q);
-        for (j, st) in stations.iter().enumerate() {
-            let mut l = (1.0 + length_scale) * (st - p).norm() - dead[j];
-            if sigma > 0.0 {
-                l += noise.sample(rng);
+        for (k, o) in offsets.iter().enumerate() {
+            let id = if offsets.len() > 1 {
+                let _ = writeln!(
+                    targets_csv,
+                    "P{}T{},{},{},{},{},{},{}",
+                    i + 1,
+                    k + 1,
+                    q[0],
+                    q[1],
+                    q[2],
+                    o.x,
+                    o.y,
+                    o.z
+                );
+                format!("P{}T{}", i + 1, k + 1)
+            } else {
+                let _ = writeln!(targets_csv, "P{},{},{},{}", i + 1, q[0], q[1], q[2]);
+                format!("P{}", i + 1)
+            };
+            let p = m.reflector(*q, *o);
+            for (j, st) in stations.iter().enumerate() {
+                let mut l = (1.0 + length_scale) * (st - p).norm() - dead[j];
+                if sigma > 0.0 {
+                    l += noise.sample(rng);
+                }
+                let _ = writeln!(lengths, "S{},{id},{l:.7}", j + 1);
+                n_obs += 1;
             }
-            let _ = writeln!(lengths, "S{},{id},{l:.7}", j + 1);
-            n_obs += 1;
         }
     }
     std::fs::write(dir.join("targets.csv"), targets_csv)?;
@@ -390,7 +446,7 @@ pub(crate) fn write(spec: &Spec, rng: &mut ChaCha8Rng, dir: &Path) -> std::io::R
     });
     let path = write_manifest(dir, manifest, &spec.base_model)?;
     Ok(Truth {
-        kind: Kind::Tracker,
+        kind: spec.kind,
         manifest: path,
         effects,
         ordinary,

@@ -24,7 +24,8 @@ dataset_manifest!(
     Manifest {
         machine: Option<String>,
         setups: Vec<Station>,
-        /// The targets table: `id`, commanded axes `<axis>_mm` / `<axis>_deg`, optional `t_s`.
+        /// The targets table: `id`, commanded axes `<axis>_mm` / `<axis>_deg`, optional `t_s`
+        /// and the reflector's offset from the tool tip (`tool_x_mm`, `tool_y_mm`, `tool_z_mm`).
         targets: Option<String>,
     }
 );
@@ -44,6 +45,9 @@ pub struct Tracker {
     observations: Observations,
     /// Commanded axes per target.
     axes: Vec<Vec<f64>>,
+    /// The reflector's offset from the tool tip per target, turned into the workpiece frame
+    /// (mm): the lever arm through which the tool's angular errors move it.
+    lever: Vec<Vec3>,
     station_ids: Vec<String>,
     station_of: Vec<usize>,
     target_of: Vec<usize>,
@@ -83,12 +87,15 @@ impl Tracker {
             .map(|r| targets.text(r, id_col).to_string())
             .collect();
         let zero = vec![0.0; machine.n_slots()];
-        let nominal: Vec<Vec3> = (0..targets.len())
+        let offsets = read_tool_offsets(&targets)?;
+        let (nominal, lever): (Vec<Vec3>, Vec<Vec3>) = (0..targets.len())
             .map(|r| {
                 let q: Vec<f64> = axes.iter().map(|a| a[r]).collect();
-                machine.tool_in_workpiece(&q, &zero).translation.vector
+                let tool = machine.tool_in_workpiece(&q, &zero);
+                let lever = tool.rotation * offsets.as_ref().map_or_else(Vec3::zeros, |o| o[r]);
+                (tool.translation.vector + lever, lever)
             })
-            .collect();
+            .unzip();
         if manifest.setups.len() < 4 {
             return Err(file.error(format!(
                 "field `setups`: {} stations, a multilateration needs at least 4",
@@ -209,6 +216,7 @@ impl Tracker {
             Tracker {
                 observations,
                 axes,
+                lever,
                 station_ids: network.stations.iter().map(|s| s.id.clone()).collect(),
                 line_of_sight: (0..n).map(|k| sight(k).normalize()).collect(),
                 distance: (0..n).map(|k| sight(k).norm()).collect(),
@@ -256,14 +264,16 @@ impl ObservationModel for Tracker {
                 Quantity::Length,
             ));
         }
-        // The tool tip (reflector) error at each commanded pose, along the line of sight.
+        // The reflector's error at each commanded pose (the tool tip's translation, plus its
+        // rotation acting through the reflector's lever arm), along the line of sight.
         let n_targets = self.axes.first().map_or(0, Vec::len);
         let mut tip = vec![DMat::zeros(3, machine.n_slots()); n_targets];
         let mut jac = DMat::zeros(6, machine.n_slots());
         for (r, t) in tip.iter_mut().enumerate() {
             let q: Vec<f64> = self.axes.iter().map(|a| a[r]).collect();
             machine.jacobian_into(&q, &mut jac);
-            t.copy_from(&jac.rows(0, 3));
+            let arm = -mte_linalg::skew(&self.lever[r]);
+            t.copy_from(&(jac.rows(0, 3) + arm * jac.rows(3, 3)));
         }
         let mut s = DMat::zeros(n, machine.n_slots());
         for k in 0..n {
@@ -299,4 +309,29 @@ impl ObservationModel for Tracker {
     fn title(&self) -> String {
         self.title.clone()
     }
+}
+
+/// The reflector's offset from the tool tip in the tool frame per target (columns `tool_x_mm`,
+/// `tool_y_mm`, `tool_z_mm`, all three or none): several offsets at one pose show the tool's
+/// angular errors apart from its translations, as in a volumetric calibration.
+fn read_tool_offsets(table: &crate::dataset::Table) -> Result<Option<Vec<Vec3>>> {
+    const COLUMNS: [&str; 3] = ["tool_x_mm", "tool_y_mm", "tool_z_mm"];
+    if COLUMNS.iter().all(|c| table.column(c).is_none()) {
+        return Ok(None);
+    }
+    let columns = COLUMNS
+        .iter()
+        .map(|c| {
+            table.numbers_within(
+                table.require(c)?,
+                1e4,
+                "a reflector 10 m or more from the tool tip is not on the machine",
+            )
+        })
+        .collect::<std::result::Result<Vec<_>, _>>()?;
+    Ok(Some(
+        (0..table.len())
+            .map(|r| Vec3::new(columns[0][r], columns[1][r], columns[2][r]))
+            .collect(),
+    ))
 }
