@@ -508,6 +508,11 @@ pub fn power_plan() -> Vec<(Kind, Effect, Vec<f64>)> {
             Effect::TrackerScale,
             vec![1.0, 2.0, 5.0, 10.0],
         ),
+        (
+            Kind::TrackerTools,
+            Effect::Squareness,
+            vec![10.0, 20.0, 40.0, 60.0],
+        ),
         (Kind::Rtest, Effect::PivotDrift, vec![5.0, 10.0, 20.0, 30.0]),
         (
             Kind::Rtest,

@@ -628,6 +628,10 @@ impl BaseModelSpec {
             ));
         }
         let mut out: Vec<Term> = Vec::new();
+        // A squareness not in the axis ISO 230-1 names it by (`EC0X` for `EC0Y`) comes after
+        // the others: where the data see only the angle between the axes, the base keeps the
+        // ISO one and lists the other as not separable.
+        let mut deferred: Vec<Term> = Vec::new();
         for slot in slots {
             if slot.column.iter().all(|v| v.abs() < 1e-15) || self.except.contains(&slot.name) {
                 continue;
@@ -646,7 +650,13 @@ impl BaseModelSpec {
             match &slot.role {
                 SlotRole::Constant {
                     family: Family::Squareness,
-                } if self.squareness => out.push(constant(Family::Base)),
+                } if self.squareness => {
+                    if squareness_plane(&slot.name).is_some_and(|(_, later)| later) {
+                        out.push(constant(Family::Base));
+                    } else {
+                        deferred.push(constant(Family::Base));
+                    }
+                }
                 SlotRole::Constant { .. } if self.location && location.contains(&slot.name) => {
                     out.push(constant(Family::Base))
                 }
@@ -673,6 +683,7 @@ impl BaseModelSpec {
                 _ => {}
             }
         }
+        out.append(&mut deferred);
         for name in &self.terms {
             if out.iter().any(|t| &t.name == name) {
                 continue;
@@ -1048,6 +1059,16 @@ fn component_axis(slot: &SlotEffect) -> Option<String> {
         SlotRole::Component { axis, .. } => Some(axis.clone()),
         SlotRole::Constant { .. } => None,
     }
+}
+
+/// The plane of a squareness by its ISO 230-1 name — the index (0–2) of the direction it turns
+/// about — and whether its axis is the plane's later one (X, Y, Z order), the axis ISO 230-1
+/// names it by: `EC0Y` → (2, true), `EC0X` → (2, false); `None` for other names.
+pub(crate) fn squareness_plane(name: &str) -> Option<(usize, bool)> {
+    let (c, axis) = mte_errors::catalogue::parse_location_error_name(name)?;
+    let about = c.index().checked_sub(3)?;
+    let axis = ["X", "Y", "Z"].iter().position(|&a| a == axis)?;
+    (axis != about && about < 3).then_some((about, axis > 3 - about - axis))
 }
 
 /// The axis of a location or squareness error by its ISO 230-1 name: `Y` of `EC0Y`, `B` of

@@ -4571,15 +4571,9 @@ fn separating_hint(chosen: &Term, alternatives: &[String], pool: &[Vec<Term>]) -
 /// ISO 230-1 names it by where `t` is not: the later axis of the plane (X, Y, Z order) against
 /// the earlier one — `EC0Y` for `EC0X` (Y against X), `EB0Z` for `EB0X`, `EA0Z` for `EA0Y`.
 fn is_iso_squareness_of(name: &str, t: &Term) -> bool {
-    // (The rotation's index, and whether the axis is the plane's later one.)
-    let later = |n: &str| -> Option<(usize, bool)> {
-        let (c, axis) = mte_errors::catalogue::parse_location_error_name(n)?;
-        let about = c.index().checked_sub(3)?;
-        let axis = ["X", "Y", "Z"].iter().position(|&a| a == axis)?;
-        (axis != about).then_some((about, axis > 3 - about - axis))
-    };
+    use crate::candidate::squareness_plane;
     t.family == Family::Squareness
-        && matches!((later(&t.name), later(name)), (Some((a, false)), Some((b, true))) if a == b)
+        && matches!((squareness_plane(&t.name), squareness_plane(name)), (Some((a, false)), Some((b, true))) if a == b)
 }
 
 /// How much a term asks of the data: coefficients first, then hyper-parameters and

@@ -110,6 +110,36 @@ impl Smooth {
         }
         self.scale * (self.raw(x) - self.offset)
     }
+
+    /// The mean over `[lo, hi]`.
+    pub fn mean(&self, lo: f64, hi: f64) -> f64 {
+        simpson(lo, hi, |x| self.at(x)) / (hi - lo)
+    }
+
+    /// The slope of the least-squares line over `[lo, hi]`.
+    pub fn slope(&self, lo: f64, hi: f64) -> f64 {
+        let c = 0.5 * (lo + hi);
+        12.0 * simpson(lo, hi, |x| (x - c) * self.at(x)) / (hi - lo).powi(3)
+    }
+}
+
+/// ∫ f over `[lo, hi]` by Simpson's rule on 400 intervals.
+fn simpson(lo: f64, hi: f64, f: impl Fn(f64) -> f64) -> f64 {
+    const N: usize = 400;
+    let h = (hi - lo) / N as f64;
+    let sum: f64 = (0..=N)
+        .map(|i| {
+            let w = if i == 0 || i == N {
+                1.0
+            } else if i % 2 == 1 {
+                4.0
+            } else {
+                2.0
+            };
+            w * f(lo + h * i as f64)
+        })
+        .sum();
+    sum * h / 3.0
 }
 
 /// A smooth periodic function of a rotary axis angle (rad): random first to third harmonics of a

@@ -140,6 +140,29 @@ impl TrackerMachine {
         p
     }
 
+    /// The squareness errors EC0Y, EA0Z, EB0Z as ISO 230-1 defines them, the angles between the
+    /// axes' reference straight lines over the strokes (rad, signs of `squareness`): besides the
+    /// tilted directions of motion, the least-squares slope of each straightness over its
+    /// stroke (a straightness's linear part is a squareness), and the mean roll and yaw of the X
+    /// carriage, which turn Y (riding on it) against X and Z. The component errors are zero at
+    /// the stroke's end, not at their mean, and their straightness has a linear part; a model of
+    /// their variation along the axis leaves both to the squareness.
+    pub fn mean_squareness(&self) -> [f64; 3] {
+        let stroke = |k: usize| self.strokes[k];
+        let (x, y, z) = (
+            &self.components[0],
+            &self.components[1],
+            &self.components[2],
+        );
+        let slope = |f: &super::smooth::Smooth, k: usize| f.slope(stroke(k).0, stroke(k).1);
+        let mean = |f: &super::smooth::Smooth| f.mean(stroke(0).0, stroke(0).1);
+        [
+            self.squareness[0] + mean(&x.e[2]) + slope(&x.d[1], 0) + slope(&y.d[0], 1),
+            self.squareness[1] - mean(&x.e[0]) + slope(&y.d[2], 1) - slope(&z.d[1], 2),
+            self.squareness[2] - slope(&x.d[2], 0) + slope(&z.d[0], 2),
+        ]
+    }
+
     /// Tip error: actual minus ideal tip, mm.
     pub fn tip_error(&self, q: [f64; 3]) -> V3 {
         self.tip(q) - V3::new(q[0], q[1], q[2])
@@ -347,25 +370,26 @@ pub(crate) fn write(spec: &Spec, rng: &mut ChaCha8Rng, dir: &Path) -> std::io::R
             _ => return Err(unsupported(spec.kind, h)),
         }
     }
+    let squareness = m.mean_squareness();
     for e in &mut effects {
         if e.kind == EffectKind::Squareness {
             let k = SQUARENESS
                 .iter()
                 .position(|n| *n == e.iso_name_hint)
                 .unwrap_or(0);
-            e.value = m.squareness[k].abs();
+            e.value = squareness[k].abs();
         }
     }
     let ordinary = (0..3)
         .map(|k| TrueEffect {
             iso_name_hint: SQUARENESS[k].into(),
             kind: EffectKind::Squareness,
-            size: m.squareness[k] * 1e6,
+            size: squareness[k] * 1e6,
             unit: "urad",
-            value: m.squareness[k],
+            value: squareness[k],
             signed: false,
             period: None,
-            detail: "ordinary + hidden".into(),
+            detail: "ordinary + hidden, between the axes' mean directions".into(),
             record_change: None,
         })
         .collect();

@@ -7,7 +7,7 @@
 //! Working on the lengths keeps their independent noise, so the tests of significance are exact.
 
 use mte_kinematics::Machine;
-use mte_linalg::{DMat, DVec, Vec3};
+use mte_linalg::{DMat, DVec, Mat3, Vec3};
 use serde::Deserialize;
 
 use super::machine::{axis_variables, load_machine, read_axes, read_times, slot_effects};
@@ -45,9 +45,10 @@ pub struct Tracker {
     observations: Observations,
     /// Commanded axes per target.
     axes: Vec<Vec<f64>>,
-    /// The reflector's offset from the tool tip per target, turned into the workpiece frame
-    /// (mm): the lever arm through which the tool's angular errors move it.
-    lever: Vec<Vec3>,
+    /// Per target, the tool's nominal orientation in the workpiece frame and the reflector's
+    /// offset from the tool tip in the tool frame (mm): the lever arm through which the tool's
+    /// angular errors move the reflector. `None` without offsets (the reflector at the tip).
+    tool: Option<Vec<(Mat3, Vec3)>>,
     station_ids: Vec<String>,
     station_of: Vec<usize>,
     target_of: Vec<usize>,
@@ -88,14 +89,19 @@ impl Tracker {
             .collect();
         let zero = vec![0.0; machine.n_slots()];
         let offsets = read_tool_offsets(&targets)?;
-        let (nominal, lever): (Vec<Vec3>, Vec<Vec3>) = (0..targets.len())
+        let (nominal, tool): (Vec<Vec3>, Vec<(Mat3, Vec3)>) = (0..targets.len())
             .map(|r| {
                 let q: Vec<f64> = axes.iter().map(|a| a[r]).collect();
-                let tool = machine.tool_in_workpiece(&q, &zero);
-                let lever = tool.rotation * offsets.as_ref().map_or_else(Vec3::zeros, |o| o[r]);
-                (tool.translation.vector + lever, lever)
+                let pose = machine.tool_in_workpiece(&q, &zero);
+                let rotation = *pose.rotation.to_rotation_matrix().matrix();
+                let offset = offsets.as_ref().map_or_else(Vec3::zeros, |o| o[r]);
+                (
+                    pose.translation.vector + rotation * offset,
+                    (rotation, offset),
+                )
             })
             .unzip();
+        let tool = offsets.is_some().then_some(tool);
         if manifest.setups.len() < 4 {
             return Err(file.error(format!(
                 "field `setups`: {} stations, a multilateration needs at least 4",
@@ -216,7 +222,7 @@ impl Tracker {
             Tracker {
                 observations,
                 axes,
-                lever,
+                tool,
                 station_ids: network.stations.iter().map(|s| s.id.clone()).collect(),
                 line_of_sight: (0..n).map(|k| sight(k).normalize()).collect(),
                 distance: (0..n).map(|k| sight(k).norm()).collect(),
@@ -264,6 +270,23 @@ impl ObservationModel for Tracker {
                 Quantity::Length,
             ));
         }
+        // The reflector holder's orientation in the spindle, which no drawing states to the
+        // µrad: turned by δφ (tool frame) it moves a reflector at o by R (δφ × o).
+        if let Some(tool) = &self.tool {
+            for (k, letter) in ['X', 'Y', 'Z'].into_iter().enumerate() {
+                instrument.push(Term::single(
+                    format!("tool orientation {letter}"),
+                    format!("the reflector holder's orientation about the tool's {letter}"),
+                    "how the reflectors' holder sits in the spindle: its turn moves each reflector in proportion to its offset from the tool tip",
+                    Family::Base,
+                    DVec::from_fn(n, |r, _| {
+                        let (rotation, offset) = &tool[self.target_of[r]];
+                        offset.cross(&(rotation.transpose() * u[r]))[k]
+                    }),
+                    Quantity::Angle,
+                ));
+            }
+        }
         // The reflector's error at each commanded pose (the tool tip's translation, plus its
         // rotation acting through the reflector's lever arm), along the line of sight.
         let n_targets = self.axes.first().map_or(0, Vec::len);
@@ -272,8 +295,12 @@ impl ObservationModel for Tracker {
         for (r, t) in tip.iter_mut().enumerate() {
             let q: Vec<f64> = self.axes.iter().map(|a| a[r]).collect();
             machine.jacobian_into(&q, &mut jac);
-            let arm = -mte_linalg::skew(&self.lever[r]);
-            t.copy_from(&(jac.rows(0, 3) + arm * jac.rows(3, 3)));
+            t.copy_from(&jac.rows(0, 3));
+            if let Some(tool) = &self.tool {
+                let (rotation, offset) = &tool[r];
+                let arm = -mte_linalg::skew(&(rotation * offset));
+                *t += arm * jac.rows(3, 3);
+            }
         }
         let mut s = DMat::zeros(n, machine.n_slots());
         for k in 0..n {
