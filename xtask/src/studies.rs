@@ -1262,6 +1262,10 @@ table–table; `rtest-head`: a B swivel head with a pivot length of 150–350 mm
 head–table, whose B location errors EX0B, EZ0B place the B line against the tool it carries): \
 location errors 5–40 µm and \
 10–100 µrad, rotary error motions 1–5 µm / 2–20 µrad periodic over a turn, small linear-axis errors; \
+tracker: a three-axis machine measured from 4–6 stations at a grid of 5–7 × 4–5 × 3–4 positions \
+or 60–150 scattered ones, the reflector at the tool tip (`tracker`) or, as a volumetric \
+calibration does, at 3–4 offsets of 80–200 mm from it at every position (`tracker-tools`: the \
+tip, across in X, across in Y, further down the tool); \
 3-D points: a C table with X, Y, Z stages, every component error of X, Y, Z, three squareness \
 errors, the C line's location errors and C's six error motions, measured from two unknown \
 instrument poses with a calibrated target at 12 angles of C and 5 × 4 × 3 positions of X, Y, \
@@ -1288,7 +1292,14 @@ R-test practice (`tests/rtest.rs` in mte-diagnose). On 3-D points and tracker le
 model is not degenerate that way, but with one target it has no squareness the data could show \
 apart from an axis' yaw growing along it (through the target's lever arm) and the instrument's \
 pose or the stations (the report lists `EC0X` and `EC0Y` as not separable; the tracker test \
-finds a squareness against the stations-only model, `tests/tracker.rs`): the points' power cell is C's angular \
+finds a squareness against the stations-only model, `tests/tracker.rs`); with the reflector at \
+several offsets from the tool tip the yaw shows apart, and the `tracker-tools` power cell is the \
+XY squareness against the full model without it (its truth the angle between the axes' \
+least-squares reference lines over the strokes, as ISO 230-1 defines squareness: the directions \
+of motion, the straightness's linear parts and the X carriage's mean yaw, on which Y rides; the \
+estimate comes from the polynomials fitted at the measured positions, which weigh a wavy \
+straightness's linear part a little differently from the whole stroke's — a bias the stated u \
+does not hold). The points' power cell is C's angular \
 positioning, against the model without `ECC`, which lacks C's ordinary error motion about Z \
 too (harmonics 1–3 of a turn, a few µrad): findings of those harmonics name `ECC` as well.\n",
         r.command, r.base_seed

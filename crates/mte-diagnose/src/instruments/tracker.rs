@@ -4,6 +4,9 @@
 //! lengths themselves are the observations, linearised there: station positions and dead paths
 //! are the instrument's parameters, and the machine's errors enter through the target
 //! positions, `δℓᵢⱼ = uᵢⱼ·(δPⱼ − δQᵢ) − δdᵢ` with uᵢⱼ the unit vector from station to target.
+//! A target may state the reflector's offset `o` from the tool tip (tool frame): the reflector
+//! then moves by the tip's translation plus the tool's rotation through the lever arm `R o`,
+//! and the reflector holder's orientation in the spindle joins the instrument's parameters.
 //! Working on the lengths keeps their independent noise, so the tests of significance are exact.
 
 use mte_kinematics::Machine;
@@ -241,9 +244,10 @@ impl ObservationModel for Tracker {
         &self.observations
     }
 
-    /// The stations' positions and dead paths (instrument); the tool tip's errors along the
-    /// line of sight (constant offsets of the machine are a rigid shift of all targets, which
-    /// the stations absorb) and the tracker's scale. No base model by default: the user's
+    /// The stations' positions and dead paths and, with tool offsets, the reflector holder's
+    /// orientation (instrument); the reflector's errors along the line of sight (constant
+    /// offsets of the machine are a rigid shift of all targets, which the stations absorb) and
+    /// the tracker's scale. No base model by default: the user's
     /// volumetric model (component errors as polynomials, squareness) when asked for.
     fn effects(&self) -> Effects {
         let (machine, u) = (&self.machine, &self.line_of_sight);
