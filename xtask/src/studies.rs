@@ -1298,8 +1298,10 @@ XY squareness against the full model without it (its truth the angle between the
 least-squares reference lines over the strokes, as ISO 230-1 defines squareness: the directions \
 of motion, the straightness's linear parts and the X carriage's mean yaw, on which Y rides; the \
 estimate comes from the polynomials fitted at the measured positions, which weigh a wavy \
-straightness's linear part a little differently from the whole stroke's — a bias the stated u \
-does not hold). The points' power cell is C's angular \
+straightness's linear part differently from the whole stroke's — a bias the stated u does not \
+hold: on scattered targets the estimates fall within 2 u as they should, on a grid of 4–5 Y \
+positions about half do not, and the report notes that a squareness along an axis of so few \
+positions rests on its straightness having no more shape than they show). The points' power cell is C's angular \
 positioning, against the model without `ECC`, which lacks C's ordinary error motion about Z \
 too (harmonics 1–3 of a turn, a few µrad): findings of those harmonics name `ECC` as well.\n",
         r.command, r.base_seed

@@ -310,9 +310,16 @@ impl PeriodicReach {
         };
         match (self.periods, self.alias_step) {
             (None, _) if self.positions < crate::basis::LEAST_POSITIONS => Some(format!(
-                "{v} takes only {} distinct positions: periodic errors along {v} (a ball-screw pitch, an encoder or gear error) could not be looked for, at least {} are needed; the base's polynomial carries what such an error does at these positions",
+                "{v} takes only {} distinct positions: periodic errors along {v} (a ball-screw pitch, an encoder or gear error) could not be looked for, at least {} are needed; the base's polynomial carries what such an error does at these positions{}",
                 self.positions,
-                crate::basis::LEAST_POSITIONS
+                crate::basis::LEAST_POSITIONS,
+                if self.rotary {
+                    String::new()
+                } else {
+                    format!(
+                        ". A squareness or scale along {v} is the linear part of what these positions show: an error with more shape between them (a straightness with waves) can move it beyond its stated uncertainty"
+                    )
+                }
             )),
             (None, Some(a)) => Some(format!(
                 "the {v} positions repeat on a step of {}, too coarse for any period shorter than half the travel: periodic errors along {v} (a ball-screw pitch, an encoder or gear error) alias to smooth ones and could not be looked for; irregular steps, as ISO 230-2 prescribes, or more positions would show them",
