@@ -7,6 +7,8 @@
 use std::path::PathBuf;
 
 use mte_diagnose::{DiagnoseParams, Diagnosis, Family, diagnose, load};
+use mte_errors::units::Kind;
+use mte_errors::{AxisState, ErrorSet, Evaluator};
 use mte_kinematics::Machine;
 use mte_linalg::Vec3;
 use rand::SeedableRng;
@@ -18,7 +20,8 @@ const NOISE_UM: f64 = 0.2;
 struct Hidden {
     /// Periodic positioning error of X: amplitude (mm) and period (mm).
     x_pitch: Option<(f64, f64)>,
-    /// Straightness of Y in X growing linearly with y (rad): an X–Y squareness.
+    /// The X–Y squareness EC0Y (rad), applied as mte-errors' catalogue defines it (δx = −EC0Y·y
+    /// at the tool relative to the workpiece, `docs/conventions.md`).
     xy_squareness: f64,
     /// Relative scale error of every tracker length.
     length_scale: f64,
@@ -58,7 +61,11 @@ fn write_dataset(name: &str, hidden: &Hidden, seed: u64) -> PathBuf {
         ("S4", Vec3::new(300.0, 150.0, 150.0), 110.0),
     ];
     let x_slot = machine.slot_index_by_name("X.motion.dx").unwrap();
-    let y_slot = machine.slot_index_by_name("Y.motion.dx").unwrap();
+    let squareness = Evaluator::new(
+        &machine,
+        &ErrorSet::new("squareness").with_constant("EC0Y", hidden.xy_squareness, Kind::Angle),
+    )
+    .unwrap();
     let ecx = machine.slot_index_by_name("X.motion.ez").unwrap();
     let eaz = machine.slot_index_by_name("Z.motion.ex").unwrap();
     let tools: Vec<[f64; 3]> = match hidden.tools {
@@ -80,7 +87,18 @@ fn write_dataset(name: &str, hidden: &Hidden, seed: u64) -> PathBuf {
                 if let Some((amp, period)) = hidden.x_pitch {
                     e[x_slot] += amp * (std::f64::consts::TAU * x / period + 0.3).sin();
                 }
-                e[y_slot] += hidden.xy_squareness * y;
+                let mut square = vec![0.0; n_slots];
+                squareness
+                    .slot_errors(
+                        &AxisState {
+                            q: &[x, y, z],
+                            time_s: 0.0,
+                            directions: &[],
+                        },
+                        &mut square,
+                    )
+                    .unwrap();
+                e.iter_mut().zip(&square).for_each(|(a, b)| *a += b);
                 e[ecx] += hidden.angular.0 * (x - 350.0);
                 e[eaz] += hidden.angular.1 * (z + 350.0);
                 // The exact pose with these errors; a reflector at `o` in the tool frame.
@@ -191,12 +209,12 @@ fn squareness_between_x_and_y_is_found() {
     let f = &d.findings[0];
     assert_eq!(f.family, Family::Squareness, "{}", report(&d));
     // The data see only the angle between X and Y (carried by X, EC0X, or by Y, EC0Y): the
-    // report names it as ISO 230-1 does, Y against X, and lists the other as not separable.
-    // Y's straightness δx(y) = θ·y is Y turned by −θ about Z (ISO 230-1 signs).
+    // report names it as ISO 230-1 does, Y against X, and lists the other as not separable;
+    // its sign is the catalogue's, with which the data were made.
     assert_eq!(f.name, "EC0Y", "{}", report(&d));
     assert!(f.alternatives.iter().any(|a| a == "EC0X"), "{}", report(&d));
     let e = &f.estimates[0];
-    assert!((e.value + theta).abs() <= 2.0 * e.uncertainty, "{}", e.text);
+    assert!((e.value - theta).abs() <= 2.0 * e.uncertainty, "{}", e.text);
 }
 
 #[test]
@@ -260,5 +278,5 @@ fn tool_offsets_separate_a_squareness_from_the_axes_angular_errors() {
     let f = &d.findings[0];
     assert_eq!(f.name, "EC0Y", "{}", report(&d));
     let e = &f.estimates[0];
-    assert!((e.value + theta).abs() <= 2.0 * e.uncertainty, "{}", e.text);
+    assert!((e.value - theta).abs() <= 2.0 * e.uncertainty, "{}", e.text);
 }

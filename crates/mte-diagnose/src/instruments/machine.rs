@@ -112,15 +112,18 @@ fn axis_component(machine: &Machine, slot: usize) -> Option<usize> {
     })
 }
 
-/// Squareness of a linear axis: the linear part of its straightness. The axis `a` tilted by θ
-/// about the third direction `r` moves by `θ (r × a)` per unit travel, so the straightness in
-/// direction `d` grows as `θ ((r × a)·d) · s` with the axis coordinate `s`.
+/// Squareness of a linear axis: the linear part of its straightness. The axis, whose body moves
+/// by `travel · a` per unit of its coordinate `s` (`travel` = its sign times its direction's
+/// component along `a`: −1 for a table axis, ISO 841), tilted by θ about the third direction `r`
+/// moves by `θ travel (r × a)` per unit, so its straightness in direction `d` grows as
+/// `θ travel ((r × a)·d) · s` (`mte-errors`' convention: `EC0Y > 0` → δx = −EC0Y·y at the tool
+/// relative to the workpiece, whichever branch Y is on).
 fn squareness_effect(
     name: &SlotName,
     column: &DVec,
     coordinate: &[f64],
     slot_dir: usize,
-    axis_dir: usize,
+    (axis_dir, travel): (usize, f64),
 ) -> Option<SlotEffect> {
     let SlotRole::Component {
         axis,
@@ -135,7 +138,7 @@ fn squareness_effect(
     rv[r] = 1.0;
     av[axis_dir] = 1.0;
     dv[slot_dir] = 1.0;
-    let sign = rv.cross(&av).dot(&dv);
+    let sign = travel * rv.cross(&av).dot(&dv);
     let plane: String = [axis_dir.min(slot_dir), axis_dir.max(slot_dir)]
         .map(letter)
         .iter()
@@ -233,6 +236,7 @@ pub(crate) fn slot_effects(
                 if let (Some(k), Some(own)) =
                     (machine.axis_index(&axis.name), axis_component(machine, j))
                 {
+                    let own = (own, axis.sign * axis.direction[own]);
                     if let Some(mut sq) = squareness_effect(&name, &column, &axes[k], c, own) {
                         // A squareness is a constant: its effect at the reference pose adds in.
                         if let Some(r) = &reference {
