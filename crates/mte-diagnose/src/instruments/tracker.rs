@@ -104,7 +104,10 @@ impl Tracker {
                 )
             })
             .unzip();
-        let tool = offsets.is_some().then_some(tool);
+        // (Offset columns of zeros are the reflector at the tip: no holder to orient.)
+        let tool = offsets
+            .is_some_and(|o| o.iter().any(|v| v.norm() > 0.0))
+            .then_some(tool);
         if manifest.setups.len() < 4 {
             return Err(file.error(format!(
                 "field `setups`: {} stations, a multilateration needs at least 4",
