@@ -16,16 +16,21 @@ const SEED: u64 = 2026;
 fn diagnosed(spec: &xtask::realistic::Spec, seed: u64) -> mte_diagnose::Diagnosis {
     let dir = std::env::temp_dir().join(format!("mte-test-{}-{seed}", std::process::id()));
     let truth = xtask::realistic::write_spec(spec, seed, &dir).unwrap();
-    let p = mte_diagnose::load(&truth.manifest).unwrap();
-    let d = mte_diagnose::diagnose(
+    let d = diagnosed_manifest(&truth.manifest);
+    let _ = std::fs::remove_dir_all(&dir);
+    d
+}
+
+/// The diagnosis, with the default settings, of the dataset of `manifest`.
+fn diagnosed_manifest(manifest: &std::path::Path) -> mte_diagnose::Diagnosis {
+    let p = mte_diagnose::load(manifest).unwrap();
+    mte_diagnose::diagnose(
         &p.observations,
         p.base,
         &p.candidates,
         &mte_diagnose::DiagnoseParams::default(),
     )
-    .unwrap();
-    let _ = std::fs::remove_dir_all(&dir);
-    d
+    .unwrap()
 }
 
 #[test]
@@ -446,5 +451,46 @@ fn a_rotary_tables_worm_gear_is_named_and_sized_and_clean_tables_rarely_give_a_f
         "{} of {}",
         c.estimate_within_2u,
         c.n
+    );
+}
+
+/// The bundled `fixtures/datasets/tracker-tools/` is what `cargo xtask realistic tracker-tools
+/// 5 <dir> --hidden squareness 30` writes (checked file by file), and the diagnosis names its
+/// XY squareness alone, within 2 u of the generator's truth (ISO 230-1's angle between the
+/// axes' reference lines: the targets are scattered, so the stated u holds it).
+#[test]
+fn the_bundled_tracker_tools_dataset_names_its_squareness() {
+    const SEED: u64 = 5;
+    let fixture =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../fixtures/datasets/tracker-tools");
+    let mut spec = xtask::realistic::Spec::new(
+        Kind::TrackerTools,
+        &[Effect::Squareness.hidden(30.0, &mut studies::spec_rng(SEED))],
+    );
+    spec.base_model = studies::user_model_lacking(Kind::TrackerTools, Effect::Squareness);
+    let dir = std::env::temp_dir().join(format!("mte-tracker-tools-{}", std::process::id()));
+    let truth = xtask::realistic::write_spec(&spec, SEED, &dir).unwrap();
+    for f in [
+        "manifest.json",
+        "machine.json",
+        "targets.csv",
+        "lengths.csv",
+    ] {
+        assert!(
+            std::fs::read(dir.join(f)).unwrap() == std::fs::read(fixture.join(f)).unwrap(),
+            "{f} differs from the generator's: regenerate the fixture"
+        );
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+    let d = diagnosed_manifest(&fixture.join("manifest.json"));
+    let report = mte_diagnose::report::markdown(&d, "tracker-tools");
+    assert_eq!(d.findings.len(), 1, "{report}");
+    let f = &d.findings[0];
+    assert_eq!(f.name, "EC0Y", "{report}");
+    let (e, t) = (&f.estimates[0], truth.effects[0].value);
+    assert!(
+        (e.value.abs() - t).abs() <= 2.0 * e.uncertainty,
+        "{} against {t:e}",
+        e.text
     );
 }

@@ -11,7 +11,7 @@ use xtask::realistic::geom::V3;
 use xtask::realistic::rtest::BcMachine;
 use xtask::realistic::smooth::{Periodic, Smooth, Waviness};
 use xtask::realistic::tracker::TrackerMachine;
-use xtask::realistic::{BaseModel, Hidden, Kind, Spec, write, write_spec};
+use xtask::realistic::{BaseModel, Hidden, Kind, Spec, Truth, write, write_spec};
 
 /// Rows of a CSV file as maps from header to field.
 fn read_csv(path: &Path) -> Vec<BTreeMap<String, String>> {
@@ -162,13 +162,7 @@ fn perfect_tracker_lengths_are_station_target_distances() {
     assert_eq!(lengths.len(), truth.n_observations);
     assert!((4..=6).contains(&truth.stations.len()));
     assert!((60..=150).contains(&targets.len()));
-    for r in &lengths {
-        let j: usize = r["station"][1..].parse().unwrap();
-        let (st, dead) = truth.stations[j - 1];
-        let p = targets[&r["target"]];
-        let d = ((st[0] - p[0]).powi(2) + (st[1] - p[1]).powi(2) + (st[2] - p[2]).powi(2)).sqrt();
-        assert_abs_diff_eq!(num(r, "length_mm"), d - dead, epsilon = PRINT_MM);
-    }
+    assert_lengths_reach(&lengths, &truth, &targets, 1.0);
 }
 
 #[test]
@@ -209,13 +203,7 @@ fn perfect_tracker_tools_lengths_reach_the_reflector_at_its_offset() {
         .collect();
     let lengths = read_csv(&dir.join("lengths.csv"));
     assert_eq!(lengths.len(), truth.n_observations);
-    for r in &lengths {
-        let j: usize = r["station"][1..].parse().unwrap();
-        let (st, dead) = truth.stations[j - 1];
-        let p = targets[&r["target"]];
-        let d = ((st[0] - p[0]).powi(2) + (st[1] - p[1]).powi(2) + (st[2] - p[2]).powi(2)).sqrt();
-        assert_abs_diff_eq!(num(r, "length_mm"), d - dead, epsilon = PRINT_MM);
-    }
+    assert_lengths_reach(&lengths, &truth, &targets, 1.0);
 }
 
 #[test]
@@ -236,16 +224,28 @@ fn tracker_length_scale_multiplies_the_distances() {
             )
         })
         .collect();
-    for r in read_csv(&dir.join("lengths.csv")) {
+    assert_lengths_reach(
+        &read_csv(&dir.join("lengths.csv")),
+        &truth,
+        &targets,
+        1.0 + 7e-6,
+    );
+}
+
+/// Every tracker length is `scale` times the distance from its station to its target's
+/// position less the station's dead path.
+fn assert_lengths_reach(
+    lengths: &[BTreeMap<String, String>],
+    truth: &Truth,
+    targets: &BTreeMap<String, [f64; 3]>,
+    scale: f64,
+) {
+    for r in lengths {
         let j: usize = r["station"][1..].parse().unwrap();
         let (st, dead) = truth.stations[j - 1];
         let p = targets[&r["target"]];
         let d = ((st[0] - p[0]).powi(2) + (st[1] - p[1]).powi(2) + (st[2] - p[2]).powi(2)).sqrt();
-        assert_abs_diff_eq!(
-            num(&r, "length_mm"),
-            (1.0 + 7e-6) * d - dead,
-            epsilon = PRINT_MM
-        );
+        assert_abs_diff_eq!(num(r, "length_mm"), scale * d - dead, epsilon = PRINT_MM);
     }
 }
 
