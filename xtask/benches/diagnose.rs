@@ -28,6 +28,10 @@ fn bench(c: &mut Criterion) {
     // The size: about 2 000 lengths (400 targets from 4–6 stations).
     let mut tracker_2000 = Spec::new(Kind::Tracker, &[]);
     tracker_2000.targets = Some(400);
+    // A volumetric calibration's: 130 positions, each at the tool tip and 2–3 tool offsets
+    // (about 3 000 lengths).
+    let mut tools = Spec::new(Kind::TrackerTools, &[]);
+    tools.targets = Some(130);
     // The first seed from 11 whose programme is at least `min_obs` observations (the R-test
     // issue's dataset has about 5 000, the tracker's about 2 000 lengths; the generator's
     // programmes and stations vary with the seed).
@@ -35,6 +39,7 @@ fn bench(c: &mut Criterion) {
         ("rtest_8_cycles", rtest, Some(0.5), 4_500),
         ("tracker_volumetric", tracker, None, 0),
         ("tracker_volumetric_2000", tracker_2000, None, 1_900),
+        ("tracker_tools", tools, None, 1_900),
     ] {
         let truth = (11..)
             .map(|seed| write_spec(&spec, seed, &dir.join(name)).expect("dataset written"))
