@@ -774,10 +774,6 @@ impl BaseModelSpec {
                 // cycles over the stroke spreads over more orders than a block holds, each block
                 // too little of it to be significant alone.
                 let top = highest_completion_degree(obs, slot);
-                let cap = component_axis(slot)
-                    .and_then(|a| obs.variable(&a))
-                    .map_or(0, |v| highest_order(&v.values, false));
-                let top = top.min(cap);
                 if hi + COMPLETION_BLOCK < top
                     && let Some(cols) = component_columns(obs, slot, hi + 1, top)
                 {
@@ -795,7 +791,7 @@ impl BaseModelSpec {
                 for first in (hi + 1..=MAX_COMPONENT_DEGREE).step_by(COMPLETION_BLOCK) {
                     let last = (first + COMPLETION_BLOCK - 1)
                         .min(MAX_COMPONENT_DEGREE)
-                        .min(cap);
+                        .min(top);
                     if first > last {
                         break;
                     }
@@ -1019,7 +1015,8 @@ const POSITIONS_PER_DEGREE: usize = 4;
 /// [`MAX_COMPONENT_DEGREE`], or on an axis with many distinct positions (tracker targets,
 /// points, R-test paths) one degree per [`POSITIONS_PER_DEGREE`] of them, up to
 /// [`MAX_DENSE_COMPONENT_DEGREE`] — a smooth error with a few waves over the stroke needs
-/// about π degrees per wave, still far fewer than a ball screw's pitch error has waves.
+/// about π degrees per wave, still far fewer than a ball screw's pitch error has waves — and
+/// never beyond what the positions carry ([`highest_order`]).
 fn highest_completion_degree(obs: &Observations, slot: &SlotEffect) -> usize {
     let positions = match &slot.role {
         SlotRole::Component { axis, .. } => obs
@@ -1027,7 +1024,9 @@ fn highest_completion_degree(obs: &Observations, slot: &SlotEffect) -> usize {
             .map_or(0, |v| crate::basis::distinct_sorted(&v.values).len()),
         SlotRole::Constant { .. } => 0,
     };
-    (positions / POSITIONS_PER_DEGREE).clamp(MAX_COMPONENT_DEGREE, MAX_DENSE_COMPONENT_DEGREE)
+    (positions / POSITIONS_PER_DEGREE)
+        .clamp(MAX_COMPONENT_DEGREE, MAX_DENSE_COMPONENT_DEGREE)
+        .min(positions.saturating_sub(1))
 }
 
 /// Polynomial degrees a completion adds at once.
