@@ -389,7 +389,7 @@ pub(crate) fn write(spec: &Spec, rng: &mut ChaCha8Rng, dir: &Path) -> std::io::R
             value: squareness[k],
             signed: false,
             period: None,
-            detail: "ordinary + hidden, between the axes' mean directions".into(),
+            detail: "ordinary + hidden, between the axes' reference lines".into(),
             record_change: None,
         })
         .collect();
@@ -412,23 +412,15 @@ pub(crate) fn write(spec: &Spec, rng: &mut ChaCha8Rng, dir: &Path) -> std::io::R
     for (i, q) in targets.iter().enumerate() {
         for (k, o) in offsets.iter().enumerate() {
             let id = if offsets.len() > 1 {
-                let _ = writeln!(
-                    targets_csv,
-                    "P{}T{},{},{},{},{},{},{}",
-                    i + 1,
-                    k + 1,
-                    q[0],
-                    q[1],
-                    q[2],
-                    o.x,
-                    o.y,
-                    o.z
-                );
                 format!("P{}T{}", i + 1, k + 1)
             } else {
-                let _ = writeln!(targets_csv, "P{},{},{},{}", i + 1, q[0], q[1], q[2]);
                 format!("P{}", i + 1)
             };
+            let _ = write!(targets_csv, "{id},{},{},{}", q[0], q[1], q[2]);
+            if offsets.len() > 1 {
+                let _ = write!(targets_csv, ",{},{},{}", o.x, o.y, o.z);
+            }
+            targets_csv.push('\n');
             let p = m.reflector(*q, *o);
             for (j, st) in stations.iter().enumerate() {
                 let mut l = (1.0 + length_scale) * (st - p).norm() - dead[j];

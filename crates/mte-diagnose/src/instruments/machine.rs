@@ -411,6 +411,27 @@ pub(crate) fn read_axes(machine: &Machine, table: &Table) -> Result<Vec<Vec<f64>
         .collect()
 }
 
+/// The vectors of three columns (`names`: x, y, z) of every row, each number's magnitude below
+/// `max_abs` (`meaning` says why).
+pub(crate) fn read_vectors(
+    table: &Table,
+    names: [&str; 3],
+    max_abs: f64,
+    meaning: &str,
+) -> Result<Vec<Vec3>> {
+    let at = names
+        .iter()
+        .map(|c| table.require(c))
+        .collect::<std::result::Result<Vec<_>, _>>()?;
+    let columns = at
+        .into_iter()
+        .map(|c| table.numbers_within(c, max_abs, meaning))
+        .collect::<std::result::Result<Vec<_>, _>>()?;
+    Ok((0..table.len())
+        .map(|r| Vec3::new(columns[0][r], columns[1][r], columns[2][r]))
+        .collect())
+}
+
 /// Largest linear axis command (mm) and rotary axis command (°) a dataset may hold.
 pub(crate) const LINEAR_LIMIT_MM: f64 = 1e7;
 /// See [`LINEAR_LIMIT_MM`].

@@ -22,7 +22,7 @@ use mte_kinematics::Machine;
 use mte_linalg::{DMat, DVec, Mat3, Vec3};
 
 use super::machine::{
-    axis_variables, load_machine, location_names, read_axes, read_times, slot_effects,
+    axis_variables, load_machine, location_names, read_axes, read_times, read_vectors, slot_effects,
 };
 use crate::Result;
 use crate::candidate::{BaseModelSpec, SlotEffect, SlotRole};
@@ -113,26 +113,12 @@ impl Points {
         let q: Vec<Vec<f64>> = (0..rows)
             .map(|r| axes.iter().map(|a| a[r]).collect())
             .collect();
-        let m: Vec<Vec3> = {
-            let cols = [
-                table.require("point_x_mm")?,
-                table.require("point_y_mm")?,
-                table.require("point_z_mm")?,
-            ];
-            let v: Vec<Vec<f64>> = cols
-                .iter()
-                .map(|&c| {
-                    table.numbers_within(
-                        c,
-                        1e6,
-                        "a coordinate of 1 km or more is not a measured point",
-                    )
-                })
-                .collect::<std::result::Result<_, _>>()?;
-            (0..rows)
-                .map(|r| Vec3::new(v[0][r], v[1][r], v[2][r]))
-                .collect()
-        };
+        let m = read_vectors(
+            &table,
+            ["point_x_mm", "point_y_mm", "point_z_mm"],
+            1e6,
+            "a coordinate of 1 km or more is not a measured point",
+        )?;
         let (setup_ids, setup_of) = table.groups(table.require("setup")?);
         for (k, id) in setup_ids.iter().enumerate() {
             let count = setup_of.iter().filter(|&&s| s == k).count();

@@ -13,7 +13,9 @@ use mte_kinematics::Machine;
 use mte_linalg::{DMat, DVec, Mat3, Vec3};
 use serde::Deserialize;
 
-use super::machine::{axis_variables, load_machine, read_axes, read_times, slot_effects};
+use super::machine::{
+    axis_variables, load_machine, read_axes, read_times, read_vectors, slot_effects,
+};
 use crate::Result;
 use crate::candidate::{SlotEffect, SlotRole};
 use crate::data::{Observations, Variable, VariableKind};
@@ -353,19 +355,11 @@ fn read_tool_offsets(table: &crate::dataset::Table) -> Result<Option<Vec<Vec3>>>
     if COLUMNS.iter().all(|c| table.column(c).is_none()) {
         return Ok(None);
     }
-    let columns = COLUMNS
-        .iter()
-        .map(|c| {
-            table.numbers_within(
-                table.require(c)?,
-                1e4,
-                "a reflector 10 m or more from the tool tip is not on the machine",
-            )
-        })
-        .collect::<std::result::Result<Vec<_>, _>>()?;
-    Ok(Some(
-        (0..table.len())
-            .map(|r| Vec3::new(columns[0][r], columns[1][r], columns[2][r]))
-            .collect(),
-    ))
+    read_vectors(
+        table,
+        COLUMNS,
+        1e4,
+        "a reflector 10 m or more from the tool tip is not on the machine",
+    )
+    .map(Some)
 }
