@@ -432,6 +432,20 @@ pub(crate) fn read_vectors(
         .collect())
 }
 
+/// [`read_vectors`] for optional columns: `None` when none of the three is in the table (all
+/// three are required once one is).
+pub(crate) fn read_optional_vectors(
+    table: &Table,
+    names: [&str; 3],
+    max_abs: f64,
+    meaning: &str,
+) -> Result<Option<Vec<Vec3>>> {
+    if names.iter().all(|c| table.column(c).is_none()) {
+        return Ok(None);
+    }
+    read_vectors(table, names, max_abs, meaning).map(Some)
+}
+
 /// Largest linear axis command (mm) and rotary axis command (°) a dataset may hold.
 pub(crate) const LINEAR_LIMIT_MM: f64 = 1e7;
 /// See [`LINEAR_LIMIT_MM`].

@@ -12,6 +12,13 @@
 //! (three translations, three rotations), and so is the target's offset unless the manifest
 //! states it (`target_mm`).
 //!
+//! Several targets may be measured at each position (`target_x_mm`, `target_y_mm`,
+//! `target_z_mm` per row: each target's place on a holder, in the frame of the side it is on, from
+//! the holder's reference point, which `target_mm` states or the fit finds). Targets apart from one
+//! another show the angular errors of the side that carries them apart from its translations, as
+//! the reflector offsets of a volumetric calibration do; the holder's orientation (three angles no
+//! drawing states to the µrad) is then in the base with the instrument's poses.
+//!
 //! The nominal machine is fitted first (Gauss–Newton on the poses and the target offset);
 //! then every residual is turned into the frame of the machine side that carries the
 //! instrument, `v = Rₛᵀ(m − tₛ) − x(q)`, so the three channels are machine directions and the
@@ -22,7 +29,8 @@ use mte_kinematics::Machine;
 use mte_linalg::{DMat, DVec, Mat3, Vec3};
 
 use super::machine::{
-    axis_variables, load_machine, location_names, read_axes, read_times, read_vectors, slot_effects,
+    axis_variables, load_machine, location_names, read_axes, read_optional_vectors, read_times,
+    read_vectors, slot_effects,
 };
 use crate::Result;
 use crate::candidate::{BaseModelSpec, SlotEffect, SlotRole};
@@ -38,7 +46,9 @@ dataset_manifest!(
         /// `tool` (default) or `workpiece`: the side of the machine the target is fixed to.
         target: Option<String>,
         /// The target's offset from the tool tip (tool frame) or from the workpiece origin
-        /// (workpiece frame), mm, when it is calibrated; estimated otherwise.
+        /// (workpiece frame), mm, when it is calibrated; estimated otherwise. With several
+        /// targets per position (per-row `target_x_mm` …), the offset of the holder's reference
+        /// point from which those are measured.
         target_mm: Option<[f64; 3]>,
     }
 );
@@ -62,9 +72,14 @@ pub struct Points {
     /// Set-up of each row.
     setup_of: Vec<usize>,
     setup_ids: Vec<String>,
-    /// The target's offset (fitted or stated) and whether it was fitted.
+    /// The target's offset (fitted or stated; with several targets, the holder's reference
+    /// point) and whether it was fitted.
     offset: Vec3,
     offset_fitted: bool,
+    /// Each row's target from the holder's reference point (zeros with one target).
+    on_holder: Vec<Vec3>,
+    /// Whether the rows' targets differ (the holder's orientation is then in the base).
+    several_targets: bool,
     /// Nominal target position per row, in the instrument side's frame.
     x: Vec<Vec3>,
     /// Instrument translation per set-up, turned into the instrument side's frame (`Rₛᵀtₛ`).
@@ -119,6 +134,14 @@ impl Points {
             1e6,
             "a coordinate of 1 km or more is not a measured point",
         )?;
+        let on_holder = read_optional_vectors(
+            &table,
+            ["target_x_mm", "target_y_mm", "target_z_mm"],
+            1e4,
+            "a target 10 m or more from its holder's reference is not on the machine",
+        )?
+        .unwrap_or_else(|| vec![Vec3::zeros(); rows]);
+        let several_targets = on_holder.iter().any(|o| o != &on_holder[0]);
         let (setup_ids, setup_of) = table.groups(table.require("setup")?);
         for (k, id) in setup_ids.iter().enumerate() {
             let count = setup_of.iter().filter(|&&s| s == k).count();
@@ -143,6 +166,7 @@ impl Points {
             .collect();
         let fit = fit_nominal(
             &frames,
+            &on_holder,
             side,
             &m,
             &setup_of,
@@ -196,6 +220,8 @@ impl Points {
                 x: fit.x,
                 offset: fit.offset,
                 offset_fitted: manifest.target_mm.is_none(),
+                on_holder,
+                several_targets,
                 machine,
                 side,
                 observations,
@@ -237,9 +263,11 @@ fn target_position(frame: &(Mat3, Vec3), side: Side, offset: &Vec3) -> Vec3 {
 }
 
 /// Fits the instrument's poses (and the target offset unless `known`) to the measured points
-/// by Gauss–Newton from a closed-form start (Kabsch with the offset at zero).
+/// by Gauss–Newton from a closed-form start (Kabsch with the offset at zero); row `r`'s target
+/// is at `on_holder[r]` from the offset.
 fn fit_nominal(
     frames: &[(Mat3, Vec3)],
+    on_holder: &[Vec3],
     side: Side,
     m: &[Vec3],
     setup_of: &[usize],
@@ -250,7 +278,8 @@ fn fit_nominal(
     let positions = |offset: &Vec3| -> Vec<Vec3> {
         frames
             .iter()
-            .map(|f| target_position(f, side, offset))
+            .zip(on_holder)
+            .map(|(f, o)| target_position(f, side, &(offset + o)))
             .collect()
     };
     let mut x = positions(&offset);
@@ -357,7 +386,8 @@ impl ObservationModel for Points {
     }
 
     /// The machine's errors through the first-order kinematics at the target; the instrument's
-    /// pose in every set-up and the target's offset (unless stated) as instrument parameters;
+    /// pose in every set-up, the target's offset (unless stated) and, with several targets, their
+    /// holder's orientation as instrument parameters;
     /// the instrument's scale as a candidate. Default base: the location errors of every rotary
     /// axis, as for the R-test.
     fn effects(&self) -> Effects {
@@ -372,11 +402,10 @@ impl ObservationModel for Points {
             for j in 0..machine.n_slots() {
                 let dp = Vec3::new(jac[(0, j)], jac[(1, j)], jac[(2, j)]);
                 let dtheta = Vec3::new(jac[(3, j)], jac[(4, j)], jac[(5, j)]);
+                let offset = self.offset + self.on_holder[r];
                 let dx = match self.side {
-                    Side::Tool => dp + dtheta.cross(&(*rot * self.offset)),
-                    Side::Workpiece => {
-                        -(rot.transpose() * (dp + dtheta.cross(&(self.offset - tip))))
-                    }
+                    Side::Tool => dp + dtheta.cross(&(*rot * offset)),
+                    Side::Workpiece => -(rot.transpose() * (dp + dtheta.cross(&(offset - tip)))),
                 };
                 for k in 0..3 {
                     s[(3 * r + k, j)] = dx[k];
@@ -438,12 +467,12 @@ impl ObservationModel for Points {
                 ));
             }
         }
+        let a: Vec<Mat3> = self
+            .frames
+            .iter()
+            .map(|f| offset_jacobian(f, self.side))
+            .collect();
         if self.offset_fitted {
-            let a: Vec<Mat3> = self
-                .frames
-                .iter()
-                .map(|f| offset_jacobian(f, self.side))
-                .collect();
             for (k, letter) in ['x', 'y', 'z'].into_iter().enumerate() {
                 instrument.push(Term::single(
                     format!("target offset {letter}"),
@@ -452,6 +481,24 @@ impl ObservationModel for Points {
                     Family::Base,
                     DVec::from_fn(n, |i, _| a[i / 3][(i % 3, k)]),
                     Quantity::Length,
+                ));
+            }
+        }
+        // The holder's orientation, which no drawing states to the µrad: turned by δφ (in the
+        // frame of its side) it moves each target by δφ × o, o the target's place on it.
+        if self.several_targets {
+            for (k, letter) in ['x', 'y', 'z'].into_iter().enumerate() {
+                let axis = Vec3::ith(k, 1.0);
+                instrument.push(Term::single(
+                    format!("target holder orientation {letter}"),
+                    format!("the target holder's orientation about {letter}"),
+                    "how the targets' holder sits on its side of the machine: its turn moves each target in proportion to its place on the holder",
+                    Family::Base,
+                    DVec::from_fn(n, |i, _| {
+                        let r = i / 3;
+                        (a[r] * axis.cross(&self.on_holder[r]))[i % 3]
+                    }),
+                    Quantity::Angle,
                 ));
             }
         }

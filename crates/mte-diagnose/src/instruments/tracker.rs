@@ -14,7 +14,7 @@ use mte_linalg::{DMat, DVec, Mat3, Vec3};
 use serde::Deserialize;
 
 use super::machine::{
-    axis_variables, load_machine, read_axes, read_times, read_vectors, slot_effects,
+    axis_variables, load_machine, read_axes, read_optional_vectors, read_times, slot_effects,
 };
 use crate::Result;
 use crate::candidate::{SlotEffect, SlotRole};
@@ -93,7 +93,15 @@ impl Tracker {
             .map(|r| targets.text(r, id_col).to_string())
             .collect();
         let zero = vec![0.0; machine.n_slots()];
-        let offsets = read_tool_offsets(&targets)?;
+        // The reflector's offset from the tool tip in the tool frame per target: several offsets
+        // at one pose show the tool's angular errors apart from its translations, as in a
+        // volumetric calibration.
+        let offsets = read_optional_vectors(
+            &targets,
+            ["tool_x_mm", "tool_y_mm", "tool_z_mm"],
+            1e4,
+            "a reflector 10 m or more from the tool tip is not on the machine",
+        )?;
         let (nominal, tool): (Vec<Vec3>, Vec<(Mat3, Vec3)>) = (0..targets.len())
             .map(|r| {
                 let q: Vec<f64> = axes.iter().map(|a| a[r]).collect();
@@ -345,21 +353,4 @@ impl ObservationModel for Tracker {
     fn title(&self) -> String {
         self.title.clone()
     }
-}
-
-/// The reflector's offset from the tool tip in the tool frame per target (columns `tool_x_mm`,
-/// `tool_y_mm`, `tool_z_mm`, all three or none): several offsets at one pose show the tool's
-/// angular errors apart from its translations, as in a volumetric calibration.
-fn read_tool_offsets(table: &crate::dataset::Table) -> Result<Option<Vec<Vec3>>> {
-    const COLUMNS: [&str; 3] = ["tool_x_mm", "tool_y_mm", "tool_z_mm"];
-    if COLUMNS.iter().all(|c| table.column(c).is_none()) {
-        return Ok(None);
-    }
-    read_vectors(
-        table,
-        COLUMNS,
-        1e4,
-        "a reflector 10 m or more from the tool tip is not on the machine",
-    )
-    .map(Some)
 }
