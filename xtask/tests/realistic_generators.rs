@@ -384,8 +384,11 @@ fn generators_are_deterministic_and_hide_the_truth() {
                 tau_s: 900.0,
             }],
             // Clean datasets only: deterministic for a seed, and no hidden effect accepted.
-            Kind::Points => {
-                let (a, b) = (tmp("points-a"), tmp("points-b"));
+            Kind::Points | Kind::PointsTargets => {
+                let (a, b) = (
+                    tmp(&format!("{}-a", kind.name())),
+                    tmp(&format!("{}-b", kind.name())),
+                );
                 write(kind, &[], 11, &a).unwrap();
                 write(kind, &[], 11, &b).unwrap();
                 for f in ["manifest.json", "points.csv", "machine.json"] {
@@ -400,7 +403,7 @@ fn generators_are_deterministic_and_hide_the_truth() {
                     amplitude_um: 1.0,
                     period_mm: 20.0,
                 };
-                assert!(write(kind, &[pitch], 11, &tmp("points-c")).is_err());
+                assert!(write(kind, &[pitch], 11, &tmp(&format!("{}-c", kind.name()))).is_err());
                 continue;
             }
         };

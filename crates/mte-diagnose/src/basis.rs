@@ -13,8 +13,16 @@ pub(crate) fn range(values: &[f64]) -> (f64, f64) {
         })
 }
 
-/// Legendre polynomials P_d of the values mapped onto [−1, 1] over their observed range, one
-/// column per degree in `degrees` (an empty column set when the values do not vary).
+/// Polynomials of the values mapped onto [−1, 1] over their observed range, one column per
+/// degree in `degrees` (an empty column set when the values do not vary): Legendre's P_d made
+/// orthogonal to every lower degree over the distinct values, each counted once (Gram–Schmidt,
+/// P_d less its projections), so that a term's lower degrees hold what they would alone. A
+/// component error's linear part is then the slope of the least-squares line through what the
+/// measured positions show — the reference line of ISO 230-1, whose slope is a squareness or a
+/// scale — and its constant their mean, however few the positions: Legendre's polynomials are
+/// orthogonal over the interval, not at 4 or 5 positions, where P_3 holds much of a line. Dense
+/// positions give P_d itself. A degree the distinct values cannot carry apart from the lower
+/// ones (d ≥ their number) is a column of zeros.
 pub(crate) fn legendre_columns(values: &[f64], degrees: std::ops::RangeInclusive<usize>) -> DMat {
     let (lo, hi) = range(values);
     let n = values.len();
@@ -23,16 +31,65 @@ pub(crate) fn legendre_columns(values: &[f64], degrees: std::ops::RangeInclusive
         return DMat::zeros(n, 0);
     }
     let max_degree = degrees.iter().copied().max().unwrap_or(0);
+    let unit = |v: f64| 2.0 * (v - lo) / (hi - lo) - 1.0;
+    let coefficients = orthogonalising(
+        &distinct_sorted(values)
+            .into_iter()
+            .map(unit)
+            .collect::<Vec<_>>(),
+        max_degree,
+    );
     // The recursion once per value (every degree of a row from one pass).
     let mut m = DMat::zeros(n, degrees.len());
     let mut p = Vec::with_capacity(max_degree + 2);
     for (i, v) in values.iter().enumerate() {
-        legendre_into(max_degree, 2.0 * (v - lo) / (hi - lo) - 1.0, &mut p);
+        legendre_into(max_degree, unit(*v), &mut p);
         for (j, &d) in degrees.iter().enumerate() {
-            m[(i, j)] = p[d];
+            m[(i, j)] = coefficients[d].iter().zip(&p).map(|(c, p)| c * p).sum();
         }
     }
     m
+}
+
+/// The coefficients over P_0 … P_max of the polynomials orthogonal at the points `u` (modified
+/// Gram–Schmidt in the order of the degrees, each P_d less its projections on the lower ones):
+/// row d holds Q_d = Σ_j c_dj P_j, with c_dd = 1, or zeros where P_d is a combination of the
+/// lower degrees at these points.
+fn orthogonalising(u: &[f64], max_degree: usize) -> Vec<Vec<f64>> {
+    let mut p = Vec::with_capacity(max_degree + 2);
+    let at: Vec<Vec<f64>> = u
+        .iter()
+        .map(|&u| {
+            legendre_into(max_degree, u, &mut p);
+            p.clone()
+        })
+        .collect();
+    let mut q: Vec<Vec<f64>> = Vec::with_capacity(max_degree + 1);
+    let mut coefficients: Vec<Vec<f64>> = Vec::with_capacity(max_degree + 1);
+    let dot = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(a, b)| a * b).sum::<f64>();
+    for d in 0..=max_degree {
+        let mut v: Vec<f64> = at.iter().map(|row| row[d]).collect();
+        let mut c = vec![0.0; max_degree + 1];
+        c[d] = 1.0;
+        let before = dot(&v, &v);
+        for (qj, cj) in q.iter().zip(&coefficients) {
+            let norm = dot(qj, qj);
+            if norm == 0.0 {
+                continue;
+            }
+            let r = dot(&v, qj) / norm;
+            v.iter_mut().zip(qj).for_each(|(v, q)| *v -= r * q);
+            c.iter_mut().zip(cj).for_each(|(c, cj)| *c -= r * cj);
+        }
+        // What is left of P_d at these points is rounding: a combination of the lower degrees.
+        if dot(&v, &v) <= 1e-20 * before {
+            v.iter_mut().for_each(|v| *v = 0.0);
+            c.iter_mut().for_each(|c| *c = 0.0);
+        }
+        q.push(v);
+        coefficients.push(c);
+    }
+    coefficients
 }
 
 /// P_0 … P_n at u by Bonnet's recursion, into `p` (cleared first).
@@ -620,6 +677,50 @@ mod tests {
             legendre_into(3, u, &mut p);
             assert!((p[2] - 0.5 * (3.0 * u * u - 1.0)).abs() < 1e-15);
             assert!((p[3] - 0.5 * (5.0 * u * u * u - 3.0 * u)).abs() < 1e-15);
+        }
+    }
+
+    /// At a few positions (each measured several times) the polynomials are orthogonal over the
+    /// distinct positions, so a cubic fit's linear coefficient is the slope of the least-squares
+    /// line through them (ISO 230-1's reference line); a degree the positions cannot carry is a
+    /// column of zeros; at dense positions they are Legendre's.
+    #[test]
+    fn polynomials_are_orthogonal_at_the_positions_and_legendres_when_dense() {
+        let positions = [-250.0, -120.0, 0.0, 130.0, 250.0];
+        let values: Vec<f64> = positions.iter().flat_map(|&x| [x; 3]).collect();
+        let q = legendre_columns(&values, 0..=5);
+        let at = |d: usize| -> Vec<f64> { (0..5).map(|k| q[(3 * k, d)]).collect() };
+        for i in 0..5 {
+            for j in 0..i {
+                let dot: f64 = at(i).iter().zip(at(j)).map(|(a, b)| a * b).sum();
+                assert!(dot.abs() < 1e-12, "Q{i}·Q{j} = {dot}");
+            }
+        }
+        assert!(at(4).iter().any(|v| v.abs() > 1e-3));
+        assert!(at(5).iter().all(|v| *v == 0.0), "{:?}", at(5));
+        // A wavy function's cubic fit at the positions: its linear coefficient, on the unit
+        // coordinate, is the least-squares slope through the five values.
+        let f = |x: f64| 3.0 + 2e-3 * x + (x / 60.0).sin();
+        let x = DMat::from_fn(5, 4, |k, d| at(d)[k]);
+        let y = DVec::from_fn(5, |k, _| f(positions[k]));
+        let beta = x.clone().svd(true, true).solve(&y, 1e-12).unwrap();
+        let mean = positions.iter().sum::<f64>() / 5.0;
+        let slope = positions.iter().map(|&p| (p - mean) * f(p)).sum::<f64>()
+            / positions.iter().map(|&p| (p - mean).powi(2)).sum::<f64>();
+        assert!(
+            (beta[1] / 250.0 - slope).abs() < 1e-12,
+            "{} vs {slope}",
+            beta[1] / 250.0
+        );
+        let dense: Vec<f64> = (0..=4000).map(|i| -1.0 + i as f64 / 2000.0).collect();
+        let q = legendre_columns(&dense, 3..=3);
+        for (i, &u) in dense.iter().enumerate().step_by(400) {
+            let p3 = 0.5 * (5.0 * u * u * u - 3.0 * u);
+            assert!(
+                (q[(i, 0)] - p3).abs() < 2e-3,
+                "{} vs {p3} at {u}",
+                q[(i, 0)]
+            );
         }
     }
 

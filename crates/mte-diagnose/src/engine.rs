@@ -317,7 +317,7 @@ impl PeriodicReach {
                     String::new()
                 } else {
                     format!(
-                        ". A squareness or scale along {v} is the linear part of what these positions show: an error with more shape between them (a straightness with waves) can move it beyond its stated uncertainty"
+                        ". A squareness or scale along {v} is that of the least-squares line through these positions (ISO 230-1's reference line over them): over the whole travel it differs by what the errors do between them, which these data cannot show"
                     )
                 }
             )),

@@ -51,6 +51,10 @@ pub enum Kind {
     /// 3-D points of a target on the spindle of a C-table machine with X, Y, Z stages
     /// (`mte-dataset/1`, `"kind": "points"`).
     Points,
+    /// [`Kind::Points`] with every position measured at 3–4 targets on a holder (across in X,
+    /// across in Y, down the tool), their places stated per row, as a volumetric calibration
+    /// with a tracker in 3-D mode measures.
+    PointsTargets,
     /// Bidirectional ISO 230-2 runs of a rotary table C with an autocollimator and a polygon,
     /// deviations in arcsec (`mte-dataset/1`, `"kind": "axis"`, `"axis": "C"`).
     Rotary,
@@ -58,18 +62,19 @@ pub enum Kind {
 
 impl Kind {
     /// All kinds.
-    pub const ALL: [Kind; 7] = [
+    pub const ALL: [Kind; 8] = [
         Kind::Axis,
         Kind::Tracker,
         Kind::TrackerTools,
         Kind::Rtest,
         Kind::RtestHead,
         Kind::Points,
+        Kind::PointsTargets,
         Kind::Rotary,
     ];
 
     /// Lower-case name (`axis`, `tracker`, `tracker-tools`, `rtest`, `rtest-head`, `points`,
-    /// `rotary`).
+    /// `points-targets`, `rotary`).
     pub fn name(self) -> &'static str {
         match self {
             Kind::Axis => "axis",
@@ -78,6 +83,7 @@ impl Kind {
             Kind::Rtest => "rtest",
             Kind::RtestHead => "rtest-head",
             Kind::Points => "points",
+            Kind::PointsTargets => "points-targets",
             Kind::Rotary => "rotary",
         }
     }
@@ -372,7 +378,7 @@ pub fn write_spec(spec: &Spec, seed: u64, dir: &Path) -> std::io::Result<Truth> 
         Kind::Axis => axis::write(spec, &mut rng, dir),
         Kind::Tracker | Kind::TrackerTools => tracker::write(spec, &mut rng, dir),
         Kind::Rtest | Kind::RtestHead => rtest::write(spec, &mut rng, dir),
-        Kind::Points => points::write(spec, &mut rng, dir),
+        Kind::Points | Kind::PointsTargets => points::write(spec, &mut rng, dir),
         Kind::Rotary => rotary::write(spec, &mut rng, dir),
     }
 }

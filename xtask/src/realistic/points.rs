@@ -11,7 +11,8 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, Normal};
 
-use super::geom::{Iso, V3, rot, rot_z, trans};
+use super::geom::{Iso, LinearErrors, V3, rot, rot_z, trans};
+use super::smooth::Periodic;
 use super::smooth::signed;
 
 /// What the points generator put in (kept in memory, never written).
@@ -71,11 +72,18 @@ pub fn write_points(
     let target = |x: f64, y: f64, z: f64| V3::new(x * (1.0 + x_scale), y, z) + target_mm;
     let noise = Normal::new(0.0, noise_um * 1e-3).unwrap_or_else(|_| unreachable!());
     let grid = [&[-150.0, 0.0, 150.0][..], &[-120.0, 120.0], &[-150.0, 0.0]];
-    let (csv, rows) = programme(&mut rng, grid, false, Some(&noise), &|x, y, z, c| {
-        table(c)
-            .inverse_transform_point(&target(x, y, z).into())
-            .coords
-    });
+    let (csv, rows) = programme(
+        &mut rng,
+        grid,
+        &[(V3::zeros(), target_mm)],
+        false,
+        Some(&noise),
+        &|x, y, z, c, _| {
+            table(c)
+                .inverse_transform_point(&target(x, y, z).into())
+                .coords
+        },
+    );
     std::fs::write(dir.join("points.csv"), csv)?;
     std::fs::write(
         dir.join("machine.json"),
@@ -110,17 +118,25 @@ pub fn write_points(
 
 /// The measurement programme: two set-ups, each with the instrument on the table in a pose
 /// nobody measured; in each, 12 angles of C (30° apart, jittered by ±5°, rounded to the 4
-/// decimals the file prints when `round_c`), and at each angle every (x, y, z) of `grid`: the
-/// target in the table frame (`in_table(x, y, z, c_deg)`) seen from the instrument, with
-/// `noise` on each coordinate. Returns the CSV text and its number of rows.
+/// decimals the file prints when `round_c`), and at each angle every (x, y, z) of `grid` and
+/// every target of `targets` (its place as the file states it, its offset from the tool tip):
+/// the target in the table frame (`in_table(x, y, z, c_deg, offset)`) seen from the instrument,
+/// with `noise` on each coordinate. With several targets each row states its place. Returns the
+/// CSV text and its number of rows.
 fn programme(
     rng: &mut ChaCha8Rng,
     grid: [&[f64]; 3],
+    targets: &[(V3, V3)],
     round_c: bool,
     noise: Option<&Normal<f64>>,
-    in_table: &dyn Fn(f64, f64, f64, f64) -> V3,
+    in_table: &dyn Fn(f64, f64, f64, f64, V3) -> V3,
 ) -> (String, usize) {
-    let mut csv = String::from("setup,x_mm,y_mm,z_mm,c_deg,point_x_mm,point_y_mm,point_z_mm\n");
+    let several = targets.len() > 1;
+    let mut csv = String::from(if several {
+        "setup,x_mm,y_mm,z_mm,c_deg,target_x_mm,target_y_mm,target_z_mm,point_x_mm,point_y_mm,point_z_mm\n"
+    } else {
+        "setup,x_mm,y_mm,z_mm,c_deg,point_x_mm,point_y_mm,point_z_mm\n"
+    });
     let mut rows = 0;
     for setup in ["S1", "S2"] {
         let pose = trans(V3::new(
@@ -140,17 +156,24 @@ fn programme(
             for &x in grid[0] {
                 for &y in grid[1] {
                     for &z in grid[2] {
-                        let mut v = pose
-                            .inverse_transform_point(&in_table(x, y, z, c).into())
-                            .coords;
-                        if let Some(noise) = noise {
-                            v += V3::from_fn(|_, _| noise.sample(rng));
+                        for (place, offset) in targets {
+                            let mut v = pose
+                                .inverse_transform_point(&in_table(x, y, z, c, *offset).into())
+                                .coords;
+                            if let Some(noise) = noise {
+                                v += V3::from_fn(|_, _| noise.sample(rng));
+                            }
+                            let place = if several {
+                                format!("{:.1},{:.1},{:.1},", place.x, place.y, place.z)
+                            } else {
+                                String::new()
+                            };
+                            csv.push_str(&format!(
+                                "{setup},{x:.3},{y:.3},{z:.3},{c:.4},{place}{:.5},{:.5},{:.5}\n",
+                                v.x, v.y, v.z
+                            ));
+                            rows += 1;
                         }
-                        csv.push_str(&format!(
-                            "{setup},{x:.3},{y:.3},{z:.3},{c:.4},{:.5},{:.5},{:.5}\n",
-                            v.x, v.y, v.z
-                        ));
-                        rows += 1;
                     }
                 }
             }
@@ -184,28 +207,151 @@ fn machine_json() -> serde_json::Value {
     })
 }
 
+/// The realistic points machine (the C table with X, Y, Z stages of [`machine_json`]) with its
+/// true errors: every component error of X, Y, Z, three squareness errors between them, the C
+/// line's four location errors and C's six error motions, and the hidden effects.
+#[derive(Debug, Clone)]
+pub struct PointsMachine {
+    /// Strokes of X, Y, Z, mm.
+    pub strokes: [(f64, f64); 3],
+    /// Component errors of X, Y, Z.
+    pub components: [LinearErrors; 3],
+    /// Squareness, rad: X's motion turned about Z against Y's (`[0]`), Z's about X and Y
+    /// against X's (`[1]`, `[2]`).
+    pub squareness: [f64; 3],
+    /// The C line's place (mm) and tilt about X and Y of the bed (rad): EX0C, EY0C, EA0C, EB0C.
+    pub location: [f64; 4],
+    /// C's error motions: translations (mm) and rotations (rad) as functions over a turn.
+    pub motion_d: [Periodic; 3],
+    /// See [`PointsMachine::motion_d`].
+    pub motion_e: [Periodic; 3],
+    /// C's hidden angular positioning error `amplitude · sin(k·θ + φ)`: (rad, k, φ).
+    pub angular: Option<(f64, f64, f64)>,
+    /// Open world: a Y positioning error growing from mid-Y at a rate that changes along X.
+    pub two_axis: Option<super::TwoAxis>,
+}
+
+impl PointsMachine {
+    /// A machine without errors.
+    pub fn perfect() -> Self {
+        Self {
+            strokes: STROKES,
+            components: [0; 3].map(|_| LinearErrors::zero()),
+            squareness: [0.0; 3],
+            location: [0.0; 4],
+            motion_d: [0; 3].map(|_| Periodic::zero()),
+            motion_e: [0; 3].map(|_| Periodic::zero()),
+            angular: None,
+            two_axis: None,
+        }
+    }
+
+    /// The tool frame in the bed frame: bed → Y → (squareness) → X → (squareness) → Z → tool,
+    /// each carriage moved by its nominal translation, then its error transform.
+    fn tool(&self, x: f64, y: f64, z: f64) -> Iso {
+        let [ex, ey, ez] = &self.components;
+        trans(V3::new(0.0, y, 0.0))
+            * ey.at(y)
+            * rot(V3::new(0.0, 0.0, self.squareness[0]))
+            * trans(V3::new(x, 0.0, 0.0))
+            * ex.at(x)
+            * rot(V3::new(self.squareness[1], self.squareness[2], 0.0))
+            * trans(V3::new(0.0, 0.0, z + TOOL_MM))
+            * ez.at(z)
+            * trans(V3::new(0.0, 0.0, -TOOL_MM))
+    }
+
+    /// The table frame in the bed frame: the C line displaced and tilted, the table turned by
+    /// −C (ISO 841 sign of a table axis), then C's error motions.
+    fn table(&self, c_deg: f64) -> Iso {
+        let c = c_deg.to_radians();
+        let [dx, dy, a, b] = self.location;
+        let d = V3::from_fn(|k, _| self.motion_d[k].at(c));
+        let extra = self
+            .angular
+            .map_or(0.0, |(amp, k, phase)| amp * (k * c + phase).sin());
+        let e = V3::new(
+            self.motion_e[0].at(c),
+            self.motion_e[1].at(c),
+            self.motion_e[2].at(c) + extra,
+        );
+        trans(V3::new(dx, dy, 0.0)) * rot(V3::new(a, b, 0.0)) * rot_z(-c) * trans(d) * rot(e)
+    }
+
+    /// A target at `offset` from the tool tip (tool frame, mm) in the table frame, at commanded
+    /// X, Y, Z (mm) and C (°).
+    pub fn target(&self, x: f64, y: f64, z: f64, c_deg: f64, offset: V3) -> V3 {
+        let mut p = self.tool(x, y, z).transform_point(&offset.into());
+        if let Some(e) = &self.two_axis {
+            p.y += e.at(x, y, self.strokes[1]);
+        }
+        self.table(c_deg).inverse_transform_point(&p).coords
+    }
+
+    /// The XY squareness as ISO 230-1 defines it, the angle between the axes' least-squares
+    /// reference lines through what the measured positions `x`, `y` (each once) show (rad, sign
+    /// of `squareness[0]`): besides X's turned direction of motion, the slope of each
+    /// straightness across the other axis, and the mean yaw of the Y carriage, which turns X
+    /// (riding on it) against Y.
+    pub fn xy_squareness(&self, x: &[f64], y: &[f64]) -> f64 {
+        let [ex, ey, _] = &self.components;
+        self.squareness[0] + ey.e[2].mean(y) + ex.d[1].slope(x) + ey.d[0].slope(y)
+    }
+}
+
+/// The positions of X, Y, Z the realistic programme measures, mm.
+const GRID: [&[f64]; 3] = [
+    &[-250.0, -120.0, 0.0, 130.0, 250.0],
+    &[-240.0, -80.0, 90.0, 250.0],
+    &[-260.0, -110.0, 60.0],
+];
+
+/// Strokes of X, Y, Z of the realistic machine, mm.
+const STROKES: [(f64, f64); 3] = [(-300.0, 300.0), (-300.0, 300.0), (-300.0, 100.0)];
+
+/// The places of 3–4 targets on a holder (tool frame, mm, from its reference point): one on the
+/// reference, one across in X, one across in Y and (with four) one further down the tool, each
+/// 80–200 mm out with a few mm to the sides, to 0.1 mm as a calibrated holder states them.
+fn draw_holder(rng: &mut ChaCha8Rng) -> Vec<V3> {
+    let round = |v: f64| (v * 10.0).round() / 10.0;
+    let n = rng.random_range(3..=4);
+    let mut places = vec![V3::zeros()];
+    for k in (0..3).take(n - 1) {
+        let mut o = V3::from_fn(|_, _| round(rng.random_range(-10.0..=10.0)));
+        let reach = round(rng.random_range(80.0..=200.0));
+        o[k] = if k == 2 || rng.random_bool(0.5) {
+            -reach
+        } else {
+            reach
+        };
+        places.push(o);
+    }
+    places
+}
+
 /// A realistic points dataset of the same machine: every ordinary error at once — the six
 /// component errors of each of X, Y and Z as random smooth functions, the three squareness
 /// errors between them, the C line's four location errors and C's six error motions (periodic
 /// over a turn) — measured on a richer programme (12 angles of C, 5 × 4 × 3 positions of X, Y,
-/// Z, two instrument set-ups) with a calibrated target; on top, the hidden effects of
-/// `spec`: a squareness beyond the ordinary one, an angular positioning error of C at one
-/// harmonic of a turn (on top of C's ordinary error motion about Z), or (open world) a Y
-/// positioning error growing from mid-Y at a rate that changes along X. Their random parts are
-/// drawn after every ordinary error: a clean dataset is the same with or without this option.
+/// Z, two instrument set-ups) with a calibrated target or, for `points-targets`, 3–4 targets on
+/// a holder turned by up to 0.5 mrad about each axis (the file states their places as drawn);
+/// on top, the hidden effects of `spec`: a squareness beyond the ordinary one, an angular
+/// positioning error of C at one harmonic of a turn (on top of C's ordinary error motion about
+/// Z), or (open world) a Y positioning error growing from mid-Y at a rate that changes along X.
+/// Their random parts are drawn after every ordinary error: a clean dataset is the same with or
+/// without this option.
 pub(crate) fn write(
     spec: &super::Spec,
     rng: &mut ChaCha8Rng,
     dir: &Path,
 ) -> std::io::Result<super::Truth> {
     use super::Hidden;
-    use super::geom::{LinearErrors, REALISTIC};
-    use super::smooth::Periodic;
+    use super::geom::REALISTIC;
     let s = spec.ordinary_scale;
-    let strokes = [(-300.0, 300.0), (-300.0, 300.0), (-300.0, 100.0)];
-    let [ex, ey, ez] =
-        [0, 1, 2].map(|k| LinearErrors::draw(rng, k, strokes[k], REALISTIC, s, spec.waviness));
-    let mut squareness = [0; 3].map(|_| signed(rng, 5.0, 60.0) * 1e-6 * s);
+    let mut m = PointsMachine::perfect();
+    m.components =
+        [0, 1, 2].map(|k| LinearErrors::draw(rng, k, STROKES[k], REALISTIC, s, spec.waviness));
+    m.squareness = [0; 3].map(|_| signed(rng, 5.0, 60.0) * 1e-6 * s);
     let (dx, dy) = (
         signed(rng, 10.0, 40.0) * 1e-3 * s,
         signed(rng, 10.0, 40.0) * 1e-3 * s,
@@ -214,11 +360,12 @@ pub(crate) fn write(
         signed(rng, 20.0, 80.0) * 1e-6 * s,
         signed(rng, 20.0, 80.0) * 1e-6 * s,
     );
-    let motion_d = [0; 3].map(|_| {
+    m.location = [dx, dy, a, b];
+    m.motion_d = [0; 3].map(|_| {
         let size = rng.random_range(1.0..5.0) * 1e-3 * s;
         Periodic::draw(rng, size, spec.waviness)
     });
-    let motion_e = [0; 3].map(|_| {
+    m.motion_e = [0; 3].map(|_| {
         let size = rng.random_range(2.0..20.0) * 1e-6 * s;
         Periodic::draw(rng, size, spec.waviness)
     });
@@ -229,14 +376,15 @@ pub(crate) fn write(
         rng.random_range(-60.0..-20.0),
     );
     let mut effects = Vec::new();
-    // C's angular positioning error beyond its ordinary error motion about Z: (rad, k, phase).
-    let mut angular: Option<(f64, f64, f64)> = None;
-    let mut two_axis: Option<super::TwoAxis> = None;
     for h in &spec.hidden {
         match *h {
-            Hidden::Squareness { pair, urad } if pair < 3 => {
-                squareness[pair] += urad * 1e-6;
-                effects.push(super::squareness_truth(pair, urad, squareness[pair]));
+            Hidden::Squareness { pair: 0, urad } => {
+                m.squareness[0] += urad * 1e-6;
+                effects.push(super::squareness_truth(
+                    0,
+                    urad,
+                    m.xy_squareness(GRID[0], GRID[1]),
+                ));
             }
             Hidden::AngularPositioning {
                 rotary: 1,
@@ -244,73 +392,55 @@ pub(crate) fn write(
                 urad,
             } => {
                 let (drawn, truth) =
-                    super::angular_positioning(rng, &motion_e[2], 1, harmonic, urad);
-                angular = Some(drawn);
+                    super::angular_positioning(rng, &m.motion_e[2], 1, harmonic, urad);
+                m.angular = Some(drawn);
                 effects.push(truth);
             }
             Hidden::TwoAxis { um } => {
-                let (e, truth) = super::two_axis(rng, um, strokes[0]);
-                two_axis = Some(e);
+                let (e, truth) = super::two_axis(rng, um, STROKES[0]);
+                m.two_axis = Some(e);
                 effects.push(truth);
             }
-            _ => return Err(super::unsupported(super::Kind::Points, h)),
+            _ => return Err(super::unsupported(spec.kind, h)),
         }
     }
-    // Tool side: bed → Y → (squareness) → X → (squareness) → Z → tool, each carriage moved by
-    // its nominal translation, then its error transform.
-    let tool = |x: f64, y: f64, z: f64| -> Iso {
-        trans(V3::new(0.0, y, 0.0))
-            * ey.at(y)
-            * rot(V3::new(0.0, 0.0, squareness[0]))
-            * trans(V3::new(x, 0.0, 0.0))
-            * ex.at(x)
-            * rot(V3::new(squareness[1], squareness[2], 0.0))
-            * trans(V3::new(0.0, 0.0, z + TOOL_MM))
-            * ez.at(z)
-            * trans(V3::new(0.0, 0.0, -TOOL_MM))
+    // The targets: one at the stated offset, or several on a holder whose reference point is
+    // there, turned a little (the holder's orientation is no drawing's).
+    let (places, holder) = if spec.kind == super::Kind::PointsTargets {
+        let places = draw_holder(rng);
+        let turn = V3::from_fn(|_, _| rng.random_range(-0.5..=0.5) * 1e-3);
+        (places, rot(turn))
+    } else {
+        (vec![V3::zeros()], Iso::identity())
     };
-    // Workpiece side: the C line displaced and tilted, the table turned by −C, then C's error
-    // motions.
-    let table = |c_deg: f64| -> Iso {
-        let c = c_deg.to_radians();
-        let d = V3::new(motion_d[0].at(c), motion_d[1].at(c), motion_d[2].at(c));
-        let extra = angular.map_or(0.0, |(amp, k, phase)| amp * (k * c + phase).sin());
-        let e = V3::new(
-            motion_e[0].at(c),
-            motion_e[1].at(c),
-            motion_e[2].at(c) + extra,
-        );
-        trans(V3::new(dx, dy, 0.0)) * rot(V3::new(a, b, 0.0)) * rot_z(-c) * trans(d) * rot(e)
-    };
+    let targets: Vec<(V3, V3)> = places
+        .iter()
+        .map(|o| (*o, target_mm + holder.transform_vector(o)))
+        .collect();
     let noise = Normal::new(0.0, (noise_um * 1e-3).max(1e-300)).expect("finite σ");
-    let grid = [
-        &[-250.0, -120.0, 0.0, 130.0, 250.0][..],
-        &[-240.0, -80.0, 90.0, 250.0],
-        &[-260.0, -110.0, 60.0],
-    ];
     // Angles rounded as printed: the readings are computed at the angle the file states.
     let (csv, rows) = programme(
         rng,
-        grid,
+        GRID,
+        &targets,
         true,
         (noise_um > 0.0).then_some(&noise),
-        &|x, y, z, c| {
-            let mut p = tool(x, y, z).transform_point(&target_mm.into());
-            if let Some(e) = &two_axis {
-                p.y += e.at(x, y, strokes[1]);
-            }
-            table(c).inverse_transform_point(&p).coords
-        },
+        &|x, y, z, c, o| m.target(x, y, z, c, o),
     );
     std::fs::write(dir.join("points.csv"), csv)?;
     std::fs::write(
         dir.join("machine.json"),
         serde_json::to_string_pretty(&machine_json())?,
     )?;
+    let description = if targets.len() > 1 {
+        "3-D points of targets on a holder on the spindle side, measured from the C table (simulated realistic machine)"
+    } else {
+        "3-D points of a target on the spindle side, measured from the C table (simulated realistic machine)"
+    };
     let manifest = serde_json::json!({
         "format": "mte-dataset/1",
         "kind": "points",
-        "description": "3-D points of a target on the spindle side, measured from the C table (simulated realistic machine)",
+        "description": description,
         "machine": "machine.json",
         "data": "points.csv",
         "noise_um": super::axis::stated_noise(noise_um.max(0.05)),
@@ -319,7 +449,7 @@ pub(crate) fn write(
     });
     let path = super::write_manifest(dir, manifest, &spec.base_model)?;
     Ok(super::Truth {
-        kind: super::Kind::Points,
+        kind: spec.kind,
         manifest: path,
         effects,
         ordinary: Vec::new(),

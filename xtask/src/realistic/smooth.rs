@@ -93,6 +93,19 @@ impl Smooth {
         f
     }
 
+    /// The cubic `poly[0] + poly[1]·u + poly[2]·u² + poly[3]·u³` of `u`, the coordinate mapped
+    /// from `[lo, hi]` onto `[−1, 1]` (a known error for checking what a model makes of it).
+    pub fn polynomial(lo: f64, hi: f64, poly: [f64; 4]) -> Self {
+        Self {
+            lo,
+            hi,
+            poly,
+            waves: Vec::new(),
+            scale: 1.0,
+            offset: 0.0,
+        }
+    }
+
     fn raw(&self, x: f64) -> f64 {
         let u = 2.0 * (x - self.lo) / (self.hi - self.lo) - 1.0;
         let p = self.poly[0] + u * (self.poly[1] + u * (self.poly[2] + u * self.poly[3]));
@@ -111,35 +124,21 @@ impl Smooth {
         self.scale * (self.raw(x) - self.offset)
     }
 
-    /// The mean over `[lo, hi]`.
-    pub fn mean(&self, lo: f64, hi: f64) -> f64 {
-        simpson(lo, hi, |x| self.at(x)) / (hi - lo)
+    /// The mean of its values at the positions `at` (each once).
+    pub fn mean(&self, at: &[f64]) -> f64 {
+        at.iter().map(|&x| self.at(x)).sum::<f64>() / at.len().max(1) as f64
     }
 
-    /// The slope of the least-squares line over `[lo, hi]`.
-    pub fn slope(&self, lo: f64, hi: f64) -> f64 {
-        let c = 0.5 * (lo + hi);
-        12.0 * simpson(lo, hi, |x| (x - c) * self.at(x)) / (hi - lo).powi(3)
+    /// The slope of the least-squares line through its values at the positions `at` (each
+    /// once): ISO 230-1's reference line of what those positions show.
+    pub fn slope(&self, at: &[f64]) -> f64 {
+        let c = at.iter().sum::<f64>() / at.len().max(1) as f64;
+        let spread: f64 = at.iter().map(|&x| (x - c).powi(2)).sum();
+        if spread == 0.0 {
+            return 0.0;
+        }
+        at.iter().map(|&x| (x - c) * self.at(x)).sum::<f64>() / spread
     }
-}
-
-/// ∫ f over `[lo, hi]` by Simpson's rule on 400 intervals.
-fn simpson(lo: f64, hi: f64, f: impl Fn(f64) -> f64) -> f64 {
-    const N: usize = 400;
-    let h = (hi - lo) / N as f64;
-    let sum: f64 = (0..=N)
-        .map(|i| {
-            let w = if i == 0 || i == N {
-                1.0
-            } else if i % 2 == 1 {
-                4.0
-            } else {
-                2.0
-            };
-            w * f(lo + h * i as f64)
-        })
-        .sum();
-    sum * h / 3.0
 }
 
 /// A smooth periodic function of a rotary axis angle (rad): random first to third harmonics of a

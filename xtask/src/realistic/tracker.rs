@@ -141,21 +141,22 @@ impl TrackerMachine {
     }
 
     /// The squareness errors EC0Y, EA0Z, EB0Z as ISO 230-1 defines them, the angles between the
-    /// axes' reference straight lines over the strokes (rad, signs of `squareness`): besides the
-    /// tilted directions of motion, the least-squares slope of each straightness over its
-    /// stroke (a straightness's linear part is a squareness), and the mean roll and yaw of the X
-    /// carriage, which turn Y (riding on it) against X and Z. The component errors are zero at
-    /// the stroke's end, not at their mean, and their straightness has a linear part; a model of
-    /// their variation along the axis leaves both to the squareness.
-    pub fn mean_squareness(&self) -> [f64; 3] {
-        let stroke = |k: usize| self.strokes[k];
+    /// axes' least-squares reference lines (rad, signs of `squareness`), through what the
+    /// measured positions of each axis (`positions`: X, Y, Z, each once) show: besides the tilted
+    /// directions of motion, the slope of each straightness (a straightness's linear part is a
+    /// squareness), and the mean roll and yaw of the X carriage, which turn Y (riding on it)
+    /// against X and Z. The component errors are zero at the stroke's end, not at their mean, and
+    /// their straightness has a linear part; a model of their variation along the axis leaves
+    /// both to the squareness. (Over the whole stroke the lines differ by what the errors do
+    /// between the positions, which no measurement at them shows.)
+    pub fn squareness_at(&self, positions: [&[f64]; 3]) -> [f64; 3] {
         let (x, y, z) = (
             &self.components[0],
             &self.components[1],
             &self.components[2],
         );
-        let slope = |f: &super::smooth::Smooth, k: usize| f.slope(stroke(k).0, stroke(k).1);
-        let mean = |f: &super::smooth::Smooth| f.mean(stroke(0).0, stroke(0).1);
+        let slope = |f: &super::smooth::Smooth, k: usize| f.slope(positions[k]);
+        let mean = |f: &super::smooth::Smooth| f.mean(positions[0]);
         [
             self.squareness[0] + mean(&x.e[2]) + slope(&x.d[1], 0) + slope(&y.d[0], 1),
             self.squareness[1] - mean(&x.e[0]) + slope(&y.d[2], 1) - slope(&z.d[1], 2),
@@ -370,7 +371,23 @@ pub(crate) fn write(spec: &Spec, rng: &mut ChaCha8Rng, dir: &Path) -> std::io::R
             _ => return Err(unsupported(spec.kind, h)),
         }
     }
-    let squareness = m.mean_squareness();
+    let stations = draw_stations(rng, strokes);
+    let dead: Vec<f64> = stations
+        .iter()
+        .map(|_| rng.random_range(80.0..=150.0))
+        .collect();
+    let targets = draw_targets(rng, strokes, spec.targets);
+    let offsets = draw_tool_offsets(rng, spec.kind);
+    // The squareness between the reference lines through the measured positions.
+    let positions: Vec<Vec<f64>> = (0..3)
+        .map(|k| {
+            let mut v: Vec<f64> = targets.iter().map(|q| q[k]).collect();
+            v.sort_by(f64::total_cmp);
+            v.dedup();
+            v
+        })
+        .collect();
+    let squareness = m.squareness_at([&positions[0], &positions[1], &positions[2]]);
     for e in &mut effects {
         if e.kind == EffectKind::Squareness {
             let k = SQUARENESS
@@ -394,13 +411,6 @@ pub(crate) fn write(spec: &Spec, rng: &mut ChaCha8Rng, dir: &Path) -> std::io::R
         })
         .collect();
 
-    let stations = draw_stations(rng, strokes);
-    let dead: Vec<f64> = stations
-        .iter()
-        .map(|_| rng.random_range(80.0..=150.0))
-        .collect();
-    let targets = draw_targets(rng, strokes, spec.targets);
-    let offsets = draw_tool_offsets(rng, spec.kind);
     let noise = Normal::new(0.0, (sigma * 1e-3).max(1e-300)).expect("finite σ");
     let mut targets_csv = String::from(if offsets.len() > 1 {
         "id,x_mm,y_mm,z_mm,tool_x_mm,tool_y_mm,tool_z_mm\n"
