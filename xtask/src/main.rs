@@ -1,7 +1,7 @@
 //! `cargo xtask reproduce [seed000|seed002|seed003|seed004|all] [--check]`,
 //! `cargo xtask reproduce seed003 --timing` (writes `docs/reproduction/seed003-timing.md`) and
 //! `cargo xtask bench [-- criterion args]` and
-//! `cargo xtask study [fdr|power|coverage|combined|openworld|all] [--n N] [--n-power M] [--seed S] [--kind axis|tracker|tracker-tools|rtest|rtest-head|points|rotary] [--base-model omit] [--out FILE]`.
+//! `cargo xtask study [fdr|power|coverage|combined|openworld|all] [--n N] [--n-power M] [--seed S] [--kind axis|tracker|tracker-tools|rtest|rtest-head|points|points-targets|rotary] [--base-model omit] [--out FILE]`.
 //!
 //! The generators are in the library target (`xtask::reproduce`), so the staleness test in
 //! `tests/reproduction_up_to_date.rs` runs the very same code.
@@ -9,9 +9,9 @@
 use std::process::{Command, ExitCode};
 use xtask::reproduce::{self, Freshness, PAPERS};
 
-const USAGE: &str = "usage: cargo xtask <reproduce [seed000|seed002|seed003|seed004|all] [--check] | reproduce seed003 --timing | bench [-- criterion args] | bench-diagnose [--rows N] [--seed S] | study [fdr|power|coverage|combined|openworld|all] [--n N] [--n-power M] [--seed S] [--kind axis|tracker|tracker-tools|rtest|rtest-head|points|rotary] [--base-model omit] [--out FILE]>";
+const USAGE: &str = "usage: cargo xtask <reproduce [seed000|seed002|seed003|seed004|all] [--check] | reproduce seed003 --timing | bench [-- criterion args] | bench-diagnose [--rows N] [--seed S] | study [fdr|power|coverage|combined|openworld|all] [--n N] [--n-power M] [--seed S] [--kind axis|tracker|tracker-tools|rtest|rtest-head|points|points-targets|rotary] [--base-model omit] [--out FILE]>";
 
-/// `cargo xtask realistic <axis|tracker|tracker-tools|rtest|rtest-head|points|rotary> <seed> <dir> [--hidden EFFECT SIZE]
+/// `cargo xtask realistic <axis|tracker|tracker-tools|rtest|rtest-head|points|points-targets|rotary> <seed> <dir> [--hidden EFFECT SIZE]
 /// [--cycles N] [--targets N]`: writes one realistic dataset (every ordinary error) for trying
 /// `mte diagnose` or timing it; clean unless `--hidden` names a study effect (`pitch`,
 /// `sawtooth`, `risefall`, … in the unit of the studies' tables; its other parameters drawn
@@ -22,7 +22,7 @@ const USAGE: &str = "usage: cargo xtask <reproduce [seed000|seed002|seed003|seed
 /// 8 cycles, 400 targets). `points` writes 3-D points of a C table with a calibrated target
 /// (the bundled `fixtures/datasets/c-stage-points/` is seed 1).
 fn run_realistic(args: &[String]) -> Result<(), String> {
-    const USAGE: &str = "usage: cargo xtask realistic <axis|tracker|tracker-tools|rtest|rtest-head|points|rotary> <seed> <dir> [--hidden EFFECT SIZE] [--cycles N] [--targets N]";
+    const USAGE: &str = "usage: cargo xtask realistic <axis|tracker|tracker-tools|rtest|rtest-head|points|points-targets|rotary> <seed> <dir> [--hidden EFFECT SIZE] [--cycles N] [--targets N]";
     let (positional, options) = args.split_at(args.len().min(3));
     let [kind, seed, dir] = positional else {
         return Err(USAGE.into());

@@ -473,7 +473,7 @@ fn a_rotary_tables_worm_gear_is_named_and_sized_and_clean_tables_rarely_give_a_f
 /// The bundled `fixtures/datasets/tracker-tools/` is what `cargo xtask realistic tracker-tools
 /// 5 <dir> --hidden squareness 30` writes (checked file by file), and the diagnosis names its
 /// XY squareness alone, within 2 u of the generator's truth (ISO 230-1's angle between the
-/// axes' reference lines: the targets are scattered, so the stated u holds it).
+/// axes' reference lines through the measured positions).
 #[test]
 fn the_bundled_tracker_tools_dataset_names_its_squareness() {
     const SEED: u64 = 5;

@@ -12,8 +12,7 @@ use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, Normal};
 
 use super::geom::{Iso, LinearErrors, V3, rot, rot_z, trans};
-use super::smooth::Periodic;
-use super::smooth::signed;
+use super::smooth::{Periodic, signed};
 
 /// What the points generator put in (kept in memory, never written).
 #[derive(Debug, Clone)]
@@ -207,7 +206,7 @@ fn machine_json() -> serde_json::Value {
     })
 }
 
-/// The realistic points machine (the C table with X, Y, Z stages of [`machine_json`]) with its
+/// The realistic points machine (the C table with X, Y, Z stages the dataset's `machine.json` describes) with its
 /// true errors: every component error of X, Y, Z, three squareness errors between them, the C
 /// line's four location errors and C's six error motions, and the hidden effects.
 #[derive(Debug, Clone)]

@@ -93,19 +93,6 @@ impl Smooth {
         f
     }
 
-    /// The cubic `poly[0] + poly[1]·u + poly[2]·u² + poly[3]·u³` of `u`, the coordinate mapped
-    /// from `[lo, hi]` onto `[−1, 1]` (a known error for checking what a model makes of it).
-    pub fn polynomial(lo: f64, hi: f64, poly: [f64; 4]) -> Self {
-        Self {
-            lo,
-            hi,
-            poly,
-            waves: Vec::new(),
-            scale: 1.0,
-            offset: 0.0,
-        }
-    }
-
     fn raw(&self, x: f64) -> f64 {
         let u = 2.0 * (x - self.lo) / (self.hi - self.lo) - 1.0;
         let p = self.poly[0] + u * (self.poly[1] + u * (self.poly[2] + u * self.poly[3]));
