@@ -206,9 +206,10 @@ fn machine_json() -> serde_json::Value {
     })
 }
 
-/// The realistic points machine (the C table with X, Y, Z stages the dataset's `machine.json` describes) with its
-/// true errors: every component error of X, Y, Z, three squareness errors between them, the C
-/// line's four location errors and C's six error motions, and the hidden effects.
+/// The realistic points machine (the C table with X, Y, Z stages the dataset's `machine.json`
+/// describes) with its true errors: every component error of X, Y, Z, three squareness errors
+/// between them, the C line's four location errors and C's six error motions, and the hidden
+/// effects.
 #[derive(Debug, Clone)]
 pub struct PointsMachine {
     /// Strokes of X, Y, Z, mm.
