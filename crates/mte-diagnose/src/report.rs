@@ -523,6 +523,10 @@ fn detection_limits_section(s: &mut String, limits: &[crate::engine::DetectionLi
 /// ppm …) is no size an ordinary error of a machine tool has: the data cannot see the cause.
 const BEYOND_REACH: f64 = 1000.0;
 
+/// σ0 beyond which the misfit is the dataset's, not the machine's: residuals a hundred times
+/// the stated noise (tens of µm and more for an instrument of a few tenths of a µm).
+const GROSS_MISFIT: f64 = 100.0;
+
 /// Three significant digits.
 fn significant(v: f64) -> String {
     let digits = (2 - v.abs().max(1e-300).log10().floor() as i32).clamp(0, 6) as usize;
@@ -558,10 +562,13 @@ fn unexplained(d: &Diagnosis) -> String {
         && d.extended.sigma0 > crate::engine::STATED_NOISE_TOLERANCE
     {
         text.push_str(&format!(
-            "The residuals are {:.1} times the stated noise (σ0, χ² test {}).",
-            d.extended.sigma0,
+            "The residuals are {} times the stated noise (σ0, χ² test {}).",
+            significant(d.extended.sigma0),
             d.extended.chi2_p_value.map(p_text).unwrap_or_default()
         ));
+        if d.extended.sigma0 > GROSS_MISFIT {
+            text.push_str(" Residuals this large are no machine error of a few µm or µrad: check the dataset itself — the units of each column, the axes' signs and directions in the machine file, the stated noise, the offsets of targets or reflectors (a table that leaves them out, or states them as zeros, for readings taken with them).");
+        }
     }
     if let Some((sigma0, _)) = d.without_outliers {
         text.push_str(&format!(

@@ -293,3 +293,38 @@ fn tool_offsets_separate_a_squareness_from_the_axes_angular_errors() {
     let e = &f.estimates[0];
     assert!((e.value - theta).abs() <= 2.0 * e.uncertainty, "{}", e.text);
 }
+
+/// Readings taken with the reflector at several offsets, in a targets table that states the
+/// offsets as zeros: the model cannot explain them, and the report points at the dataset (its
+/// offsets among what to check) instead of naming a cause.
+#[test]
+fn offsets_left_out_of_the_table_are_pointed_at() {
+    let path = write_dataset(
+        "zero-offsets",
+        &Hidden {
+            tools: &[[0.0, 0.0, 0.0], [150.0, 5.0, 0.0], [-3.0, -140.0, 2.0]],
+            ..NONE
+        },
+        38,
+    );
+    let targets = path.with_file_name("targets.csv");
+    let text = std::fs::read_to_string(&targets).unwrap();
+    let zeroed: String = text
+        .lines()
+        .enumerate()
+        .map(|(i, line)| {
+            if i == 0 {
+                format!("{line}\n")
+            } else {
+                let fields: Vec<&str> = line.split(',').take(4).collect();
+                format!("{},0,0,0\n", fields.join(","))
+            }
+        })
+        .collect();
+    std::fs::write(&targets, zeroed).unwrap();
+    let d = run(&path);
+    let text = report(&d);
+    assert_eq!(d.verdict, mte_diagnose::Verdict::Unexplained, "{text}");
+    assert!(d.extended.sigma0 > 100.0, "σ0 = {}", d.extended.sigma0);
+    assert!(text.contains("check the dataset itself"), "{text}");
+}
