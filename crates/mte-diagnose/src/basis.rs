@@ -56,19 +56,18 @@ pub(crate) fn legendre_columns(values: &[f64], degrees: std::ops::RangeInclusive
 /// row d holds Q_d = Σ_j c_dj P_j, with c_dd = 1, or zeros where P_d is a combination of the
 /// lower degrees at these points.
 fn orthogonalising(u: &[f64], max_degree: usize) -> Vec<Vec<f64>> {
+    // P_d at the points, one column per degree.
+    let mut at = DMat::zeros(u.len(), max_degree + 1);
     let mut p = Vec::with_capacity(max_degree + 2);
-    let at: Vec<Vec<f64>> = u
-        .iter()
-        .map(|&u| {
-            legendre_into(max_degree, u, &mut p);
-            p.clone()
-        })
-        .collect();
+    for (i, &u) in u.iter().enumerate() {
+        legendre_into(max_degree, u, &mut p);
+        at.row_mut(i).iter_mut().zip(&p).for_each(|(a, p)| *a = *p);
+    }
     let mut q: Vec<Vec<f64>> = Vec::with_capacity(max_degree + 1);
     let mut coefficients: Vec<Vec<f64>> = Vec::with_capacity(max_degree + 1);
     let dot = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(a, b)| a * b).sum::<f64>();
     for d in 0..=max_degree {
-        let mut v: Vec<f64> = at.iter().map(|row| row[d]).collect();
+        let mut v: Vec<f64> = at.column(d).iter().copied().collect();
         let mut c = vec![0.0; max_degree + 1];
         c[d] = 1.0;
         let before = dot(&v, &v);
