@@ -54,13 +54,8 @@ fn bench(c: &mut Criterion) {
             b.iter(|| {
                 let p = prepared();
                 black_box(
-                    mte_diagnose::diagnose(
-                        &p.observations,
-                        p.base,
-                        &p.candidates,
-                        &mte_diagnose::DiagnoseParams::default(),
-                    )
-                    .expect("diagnosis runs"),
+                    p.diagnose(&mte_diagnose::DiagnoseParams::default())
+                        .expect("diagnosis runs"),
                 )
             })
         });

@@ -52,13 +52,7 @@ pub fn run(rows: usize, seed: u64, dir: &Path, max_memory_gb: f64) -> Result<Sca
         ..Default::default()
     };
     let start = Instant::now();
-    let d = mte_diagnose::diagnose(
-        &prepared.observations,
-        prepared.base,
-        &prepared.candidates,
-        &params,
-    )
-    .map_err(|e| e.to_string())?;
+    let d = prepared.diagnose(&params).map_err(|e| e.to_string())?;
     let diagnose_s = start.elapsed().as_secs_f64();
     Ok(ScaleRun {
         rows: d.observations,

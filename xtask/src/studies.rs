@@ -135,13 +135,8 @@ pub fn run_one(spec: &Spec, index: usize, seed: u64, work: &Path) -> Record {
     let outcome = prepared
         .map_err(|e| format!("load: {e}"))
         .and_then(|p| {
-            mte_diagnose::diagnose(
-                &p.observations,
-                p.base,
-                &p.candidates,
-                &mte_diagnose::DiagnoseParams::default(),
-            )
-            .map_err(|e| format!("diagnose: {e}"))
+            p.diagnose(&mte_diagnose::DiagnoseParams::default())
+                .map_err(|e| format!("diagnose: {e}"))
         })
         .map(|d| Outcome {
             findings: d

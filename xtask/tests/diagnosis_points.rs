@@ -4,7 +4,7 @@
 //! the generator's truth. The generator (`xtask::realistic::points`) writes its own transforms;
 //! the diagnosis reads only the files.
 
-use mte_diagnose::{DiagnoseParams, Diagnosis, diagnose, load};
+use mte_diagnose::{DiagnoseParams, Diagnosis, load};
 use xtask::realistic::points::{PointsTruth, write_points};
 
 fn run(seed: u64, state_offset: bool) -> (PointsTruth, Diagnosis) {
@@ -15,13 +15,7 @@ fn run(seed: u64, state_offset: bool) -> (PointsTruth, Diagnosis) {
     let base = serde_json::json!({ "location": true, "terms": ["EXX scale"] });
     let truth = write_points(seed, &dir, state_offset, Some(base)).expect("write dataset");
     let p = load(&truth.manifest).expect("load points dataset");
-    let d = diagnose(
-        &p.observations,
-        p.base,
-        &p.candidates,
-        &DiagnoseParams::default(),
-    )
-    .expect("diagnose");
+    let d = p.diagnose(&DiagnoseParams::default()).expect("diagnose");
     (truth, d)
 }
 
@@ -100,13 +94,7 @@ fn realistic_points_fit_the_nominal_machine_and_name_nothing_when_clean() {
     let diagnosed = |spec: &Spec, seed: u64, name: &str| {
         let truth = write_spec(spec, seed, &dir.join(name)).unwrap();
         let p = load(&truth.manifest).unwrap();
-        diagnose(
-            &p.observations,
-            p.base,
-            &p.candidates,
-            &DiagnoseParams::default(),
-        )
-        .unwrap()
+        p.diagnose(&DiagnoseParams::default()).unwrap()
     };
     let d = diagnosed(&perfect, 5, "perfect");
     // Coordinates are printed to 0.01 µm.

@@ -24,13 +24,8 @@ fn diagnosed(spec: &xtask::realistic::Spec, seed: u64) -> mte_diagnose::Diagnosi
 /// The diagnosis, with the default settings, of the dataset of `manifest`.
 fn diagnosed_manifest(manifest: &std::path::Path) -> mte_diagnose::Diagnosis {
     let p = mte_diagnose::load(manifest).unwrap();
-    mte_diagnose::diagnose(
-        &p.observations,
-        p.base,
-        &p.candidates,
-        &mte_diagnose::DiagnoseParams::default(),
-    )
-    .unwrap()
+    p.diagnose(&mte_diagnose::DiagnoseParams::default())
+        .unwrap()
 }
 
 #[test]

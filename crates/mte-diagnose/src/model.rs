@@ -16,7 +16,7 @@ use crate::{DiagnoseError, Result};
 /// ```
 /// use mte_diagnose::{
 ///     DiagnoseParams, Effects, Family, ObservationModel, Observations, Quantity, SlotEffect,
-///     SlotRole, Term, Variable, VariableKind, diagnose, prepare,
+///     SlotRole, Term, Variable, VariableKind, prepare,
 /// };
 /// use mte_linalg::DVec;
 ///
@@ -70,7 +70,7 @@ use crate::{DiagnoseError, Result};
 /// let base_model = serde_json::json!({ "components": { "degree": 2 } });
 /// let prepared = prepare(&DialGauge { obs }, Some(&base_model), "gauge readings").unwrap();
 /// assert!(prepared.base.iter().any(|t| t.name == "EYX poly2"));
-/// let d = diagnose(&prepared.observations, prepared.base, &prepared.candidates, &DiagnoseParams::default()).unwrap();
+/// let d = prepared.diagnose(&DiagnoseParams::default()).unwrap();
 /// assert!(d.base.sigma0.is_finite());
 /// ```
 pub trait ObservationModel {
@@ -132,6 +132,17 @@ pub struct Prepared {
     pub candidates: Vec<Box<dyn Candidate>>,
     /// A title for reports.
     pub title: String,
+}
+
+impl Prepared {
+    /// Diagnoses the dataset with `params` ([`crate::diagnose`] on its observations, base model
+    /// and candidates).
+    ///
+    /// # Errors
+    /// As [`crate::diagnose`].
+    pub fn diagnose(self, params: &crate::DiagnoseParams) -> Result<crate::Diagnosis> {
+        crate::diagnose(&self.observations, self.base, &self.candidates, params)
+    }
 }
 
 /// The base model and the candidate library of an observation model: the instrument's own

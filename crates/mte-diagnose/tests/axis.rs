@@ -5,7 +5,7 @@
 
 use std::path::PathBuf;
 
-use mte_diagnose::{DiagnoseParams, Family, diagnose, load};
+use mte_diagnose::{DiagnoseParams, Family, load};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, Normal};
@@ -66,13 +66,9 @@ fn write_dataset_at(name: &str, targets: &[f64], hidden: Hidden, seed: u64) -> P
 
 fn run(path: &std::path::Path) -> mte_diagnose::Diagnosis {
     let prepared = load(path).expect("dataset loads");
-    diagnose(
-        &prepared.observations,
-        prepared.base,
-        &prepared.candidates,
-        &DiagnoseParams::default(),
-    )
-    .expect("diagnosis runs")
+    prepared
+        .diagnose(&DiagnoseParams::default())
+        .expect("diagnosis runs")
 }
 
 /// Within `k` standard uncertainties.

@@ -189,7 +189,7 @@ fn a_log_beyond_the_memory_limit_is_refused_with_the_figure() {
         max_memory_gb: 0.05,
         ..DiagnoseParams::default()
     };
-    let err = diagnose(&p.observations, p.base, &p.candidates, &params).unwrap_err();
+    let err = p.diagnose(&params).unwrap_err();
     let DiagnoseError::TooLarge {
         observations,
         columns,

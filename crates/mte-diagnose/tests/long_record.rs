@@ -2,7 +2,7 @@
 //! what the search finds is fitted to every observation: the sizes and their uncertainties come
 //! from all of them, and the report says how the search was run.
 
-use mte_diagnose::{DiagnoseParams, diagnose, load};
+use mte_diagnose::{DiagnoseParams, load};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, Normal};
@@ -69,7 +69,7 @@ fn a_long_log_is_searched_thinned_and_fitted_whole() {
         rows > params.search_rows,
         "the test needs a record longer than the search"
     );
-    let d = diagnose(&p.observations, p.base, &p.candidates, &params).unwrap();
+    let d = p.diagnose(&params).unwrap();
     let _ = std::fs::remove_dir_all(&dir);
     assert!(
         d.notes.iter().any(

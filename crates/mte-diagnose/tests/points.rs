@@ -7,7 +7,7 @@
 
 use std::path::PathBuf;
 
-use mte_diagnose::{DiagnoseParams, Diagnosis, Family, diagnose, load};
+use mte_diagnose::{DiagnoseParams, Diagnosis, Family, load};
 use mte_errors::units::Kind;
 use mte_errors::{AxisState, ErrorSet, Evaluator};
 use mte_kinematics::Machine;
@@ -108,13 +108,9 @@ fn write_dataset(name: &str, theta: f64, targets: &[[f64; 3]], seed: u64) -> Pat
 
 fn run(path: &std::path::Path) -> Diagnosis {
     let prepared = load(path).expect("dataset loads");
-    diagnose(
-        &prepared.observations,
-        prepared.base,
-        &prepared.candidates,
-        &DiagnoseParams::default(),
-    )
-    .expect("diagnosis runs")
+    prepared
+        .diagnose(&DiagnoseParams::default())
+        .expect("diagnosis runs")
 }
 
 fn report(d: &Diagnosis) -> String {

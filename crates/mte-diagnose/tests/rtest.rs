@@ -6,7 +6,7 @@
 
 use std::path::PathBuf;
 
-use mte_diagnose::{DiagnoseParams, Diagnosis, diagnose, load_with_noise};
+use mte_diagnose::{DiagnoseParams, Diagnosis, load_with_noise};
 use mte_kinematics::Machine;
 use mte_linalg::Vec3;
 use rand::SeedableRng;
@@ -230,13 +230,9 @@ fn write_dataset_with_base(
 
 fn run(path: &std::path::Path) -> Diagnosis {
     let prepared = load_with_noise(path, Some(NOISE_UM)).expect("dataset loads");
-    diagnose(
-        &prepared.observations,
-        prepared.base,
-        &prepared.candidates,
-        &DiagnoseParams::default(),
-    )
-    .expect("diagnosis runs")
+    prepared
+        .diagnose(&DiagnoseParams::default())
+        .expect("diagnosis runs")
 }
 
 fn names(d: &Diagnosis) -> Vec<String> {

@@ -6,7 +6,7 @@
 
 use std::path::PathBuf;
 
-use mte_diagnose::{DiagnoseParams, Diagnosis, Family, diagnose, load};
+use mte_diagnose::{DiagnoseParams, Diagnosis, Family, load};
 use mte_errors::units::Kind;
 use mte_errors::{AxisState, ErrorSet, Evaluator};
 use mte_kinematics::Machine;
@@ -154,13 +154,9 @@ fn write_dataset(name: &str, hidden: &Hidden, seed: u64) -> PathBuf {
 
 fn run(path: &std::path::Path) -> Diagnosis {
     let prepared = load(path).expect("dataset loads");
-    diagnose(
-        &prepared.observations,
-        prepared.base,
-        &prepared.candidates,
-        &DiagnoseParams::default(),
-    )
-    .expect("diagnosis runs")
+    prepared
+        .diagnose(&DiagnoseParams::default())
+        .expect("diagnosis runs")
 }
 
 fn report(d: &Diagnosis) -> String {

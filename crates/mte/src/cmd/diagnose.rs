@@ -2,7 +2,7 @@
 
 use std::path::PathBuf;
 
-use mte_diagnose::{DiagnoseParams, Diagnosis, Quantity, diagnose, load_with_noise, report};
+use mte_diagnose::{DiagnoseParams, Diagnosis, Quantity, load_with_noise, report};
 use plotters::prelude::*;
 
 use mte::CliError;
@@ -34,14 +34,11 @@ pub fn run(args: &Args) -> Result<(), CliError> {
         max_memory_gb: mte::limits::max_memory_gb()?,
         ..DiagnoseParams::default()
     };
-    let diagnosis = diagnose(
-        &prepared.observations,
-        prepared.base,
-        &prepared.candidates,
-        &params,
-    )
-    .map_err(|e| CliError::Library(e.to_string()))?;
-    let markdown = report::markdown(&diagnosis, &prepared.title);
+    let title = prepared.title.clone();
+    let diagnosis = prepared
+        .diagnose(&params)
+        .map_err(|e| CliError::Library(e.to_string()))?;
+    let markdown = report::markdown(&diagnosis, &title);
     let md_path = args.out.join("report.md");
     out.add("report.md", markdown.clone());
     let json_path = args.out.join("diagnosis.json");
