@@ -17,7 +17,9 @@ const USAGE: &str = "usage: cargo xtask <reproduce [seed000|seed002|seed003|seed
 /// `sawtooth`, `risefall`, … in the unit of the studies' tables; its other parameters drawn
 /// from the seed), whose truth is then printed — and written nowhere in the dataset; the
 /// manifest's base model is then the studies' user model lacking the effect
-/// ([`xtask::studies::user_model_lacking`]).
+/// ([`xtask::studies::user_model_lacking`]). `--hidden` repeated hides several effects at
+/// once, as the studies' combined cells do (the k-th of one family on the k-th axis), against
+/// the user's model of a real machine.
 /// `--cycles`: R-test measurement cycles; `--targets`: tracker targets (the benches' sizes:
 /// 8 cycles, 400 targets). `points` writes 3-D points of a C table with a calibrated target
 /// (the bundled `fixtures/datasets/c-stage-points/` is seed 1).
@@ -31,7 +33,7 @@ fn run_realistic(args: &[String]) -> Result<(), String> {
         let v = v.ok_or_else(|| format!("{flag}: expected a number\n{USAGE}"))?;
         v.parse().map_err(|e| format!("{flag} `{v}`: {e}"))
     };
-    let (mut hidden, mut cycles, mut targets) = (None, None, None);
+    let (mut hidden, mut cycles, mut targets) = (Vec::new(), None, None);
     let mut rest = options.iter();
     while let Some(flag) = rest.next() {
         match flag.as_str() {
@@ -46,7 +48,7 @@ fn run_realistic(args: &[String]) -> Result<(), String> {
                     )
                 })?;
                 let size: f64 = size.parse().map_err(|e| format!("size `{size}`: {e}"))?;
-                hidden = Some((e, size));
+                hidden.push((e, size));
             }
             "--cycles" => cycles = Some(count(flag, rest.next())?),
             "--targets" => targets = Some(count(flag, rest.next())?),
@@ -75,17 +77,14 @@ fn run_realistic(args: &[String]) -> Result<(), String> {
     let seed: u64 = seed.parse().map_err(|e| format!("seed `{seed}`: {e}"))?;
     let dir = std::path::Path::new(dir);
     std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
-    let hidden_effect = hidden;
-    let hidden: Vec<_> = hidden
-        .map(|(e, size)| {
-            use rand::SeedableRng;
-            let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed ^ 0x5eed_5eed_5eed_5eed);
-            e.hidden(size, &mut rng)
-        })
-        .into_iter()
-        .collect();
+    let effects = hidden;
+    let hidden = {
+        use rand::SeedableRng;
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed ^ 0x5eed_5eed_5eed_5eed);
+        xtask::studies::combined_hidden(&effects, &mut rng)
+    };
     let mut spec = xtask::realistic::Spec::new(kind, &hidden);
-    if let Some((effect, _)) = hidden_effect {
+    if let [(effect, _)] = effects[..] {
         spec.base_model = xtask::studies::user_model_lacking(kind, effect);
     }
     spec.cycles = cycles;

@@ -373,6 +373,8 @@ pub enum Effect {
     TrackerScale,
     /// [`Hidden::PivotDrift`] of B (EX0B), τ 600–3600 s, µm.
     PivotDrift,
+    /// [`Hidden::SpindleDrift`] along Z, τ 600–3600 s, µm.
+    SpindleDrift,
     /// [`Hidden::AngularPositioning`] of C, harmonic 1–4, µrad.
     AngularPositioning,
     /// [`Hidden::AngularPositioning`] of C at 24–90 cycles per turn (a worm gear's tooth
@@ -390,13 +392,14 @@ pub enum Effect {
 
 impl Effect {
     /// Every effect, in declaration order.
-    pub const ALL: [Effect; 12] = [
+    pub const ALL: [Effect; 13] = [
         Effect::Pitch,
         Effect::Reversal,
         Effect::ZeroDrift,
         Effect::Squareness,
         Effect::TrackerScale,
         Effect::PivotDrift,
+        Effect::SpindleDrift,
         Effect::AngularPositioning,
         Effect::WormGear,
         Effect::BTilt,
@@ -421,6 +424,7 @@ impl Effect {
             Effect::Squareness => "extra squareness EC0Y",
             Effect::TrackerScale => "tracker length scale",
             Effect::PivotDrift => "thermal drift of EX0B",
+            Effect::SpindleDrift => "thermal growth of the spindle in Z",
             Effect::AngularPositioning => "angular positioning of C (harmonic)",
             Effect::WormGear => "worm-gear error of C (24–90 per turn)",
             Effect::BTilt => "B tilt EA0B",
@@ -451,6 +455,11 @@ impl Effect {
             Effect::TrackerScale => Hidden::TrackerScale { ppm: sign * size },
             Effect::PivotDrift => Hidden::PivotDrift {
                 rotary: 0,
+                um: sign * size,
+                tau_s: rng.random_range(600.0..=3600.0),
+            },
+            Effect::SpindleDrift => Hidden::SpindleDrift {
+                axis: 2,
                 um: sign * size,
                 tau_s: rng.random_range(600.0..=3600.0),
             },
@@ -516,6 +525,11 @@ pub fn power_plan() -> Vec<(Kind, Effect, Vec<f64>)> {
         (Kind::Rtest, Effect::PivotDrift, vec![5.0, 10.0, 20.0, 30.0]),
         (
             Kind::Rtest,
+            Effect::SpindleDrift,
+            vec![2.0, 5.0, 10.0, 20.0],
+        ),
+        (
+            Kind::Rtest,
             Effect::AngularPositioning,
             vec![5.0, 10.0, 20.0, 30.0],
         ),
@@ -529,6 +543,11 @@ pub fn power_plan() -> Vec<(Kind, Effect, Vec<f64>)> {
             Kind::RtestHead,
             Effect::PivotDrift,
             vec![5.0, 10.0, 20.0, 30.0],
+        ),
+        (
+            Kind::RtestHead,
+            Effect::SpindleDrift,
+            vec![2.0, 5.0, 10.0, 20.0],
         ),
         (
             Kind::Points,
@@ -1023,6 +1042,11 @@ pub fn combined_plan() -> Vec<(Kind, Vec<(Effect, f64)>)> {
         (
             Kind::Rtest,
             vec![(Effect::PivotDrift, 10.0), (Effect::PivotDrift, 10.0)],
+        ),
+        // A thermal test's usual pair: the spindle grows while the table's pivot moves.
+        (
+            Kind::Rtest,
+            vec![(Effect::PivotDrift, 10.0), (Effect::SpindleDrift, 10.0)],
         ),
     ]
 }

@@ -141,6 +141,16 @@ pub enum Hidden {
         /// Time constant, s.
         tau_s: f64,
     },
+    /// First-order thermal growth of the spindle, `um · (1 − exp(−t/τ))`: the tool point moves
+    /// along x, y or z of the spindle's frame (EX0[tool], EY0[tool], EZ0[tool]) (rtest).
+    SpindleDrift {
+        /// Direction 0 = x, 1 = y, 2 = z.
+        axis: usize,
+        /// Final growth, µm.
+        um: f64,
+        /// Time constant, s.
+        tau_s: f64,
+    },
     /// Linear drift of the zero in time, µm/min (axis).
     ZeroDrift {
         /// Rate, µm/min.

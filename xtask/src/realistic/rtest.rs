@@ -146,6 +146,9 @@ pub struct BcMachine {
     pub location: Location,
     /// Time-dependent parts of EX0B (rotary 0) and EX0C (rotary 1).
     pub drift: Vec<(usize, TimeFn)>,
+    /// Thermal growth of the spindle: the tool point's offset along x, y, z (0, 1, 2) of the
+    /// spindle's own frame (turned by the head's B), a function of time.
+    pub spindle: Vec<(usize, TimeFn)>,
     /// Error motions of B and C.
     pub rotary: [RotaryErrors; 2],
     /// Component errors of X, Y, Z.
@@ -165,6 +168,7 @@ impl BcMachine {
             tool_mm,
             location: Location::default(),
             drift: Vec::new(),
+            spindle: Vec::new(),
             rotary: [RotaryErrors::zero(), RotaryErrors::zero()],
             linear: [
                 LinearErrors::zero(),
@@ -233,7 +237,11 @@ impl BcMachine {
             }
             None => Iso::identity(),
         };
-        (carriage * head * trans(V3::new(0.0, 0.0, -arm)))
+        let mut growth = V3::zeros();
+        for (k, f) in &self.spindle {
+            growth[*k] += f.at(t);
+        }
+        (carriage * head * trans(V3::new(0.0, 0.0, -arm) + growth))
             .translation
             .vector
     }
@@ -395,6 +403,27 @@ pub(crate) fn write(spec: &Spec, rng: &mut ChaCha8Rng, dir: &Path) -> std::io::R
                     signed: true,
                     period: None,
                     detail: format!("first order, τ = {tau_s:.0} s"),
+                    record_change: None,
+                });
+            }
+            Hidden::SpindleDrift { axis, um, tau_s } if axis < 3 => {
+                m.spindle.push((
+                    axis,
+                    TimeFn::FirstOrder {
+                        a: um * 1e-3,
+                        tau_s,
+                    },
+                ));
+                min_cycles = min_cycles.max(4);
+                effects.push(TrueEffect {
+                    iso_name_hint: format!("E{}0[tool]", ["X", "Y", "Z"][axis]),
+                    kind: EffectKind::Drift,
+                    size: um,
+                    unit: "um",
+                    value: um * 1e-3,
+                    signed: true,
+                    period: None,
+                    detail: format!("spindle growth, first order, τ = {tau_s:.0} s"),
                     record_change: None,
                 });
             }
@@ -573,7 +602,7 @@ pub(crate) fn write(spec: &Spec, rng: &mut ChaCha8Rng, dir: &Path) -> std::io::R
     // The drifts' change from the first reading (t = 0) to the last.
     // (One true effect per hidden one, in order: any other is refused above.)
     for (e, h) in effects.iter_mut().zip(&spec.hidden) {
-        if let Hidden::PivotDrift { um, tau_s, .. } = *h {
+        if let Hidden::PivotDrift { um, tau_s, .. } | Hidden::SpindleDrift { um, tau_s, .. } = *h {
             e.record_change = Some(um * 1e-3 * (1.0 - (-t_last / tau_s).exp()));
         }
     }

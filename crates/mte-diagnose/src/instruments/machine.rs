@@ -92,10 +92,26 @@ fn slot_name(machine: &Machine, slot: usize) -> SlotName {
             family: Family::Setup,
         },
     };
+    // The tool's place against what carries it: a tool length or offset as a constant; as it
+    // changes in time, the spindle's thermal growth (ISO 230-3), the commonest thermal effect.
+    let (label, meaning) = if s.body == machine.tool_body() && c < 3 {
+        (
+            format!(
+                "set-up of the tool (spindle nose), offset along {}",
+                ['x', 'y', 'z'][c]
+            ),
+            format!(
+                "{}; changing in time, the spindle's thermal growth or drift",
+                named.meaning
+            ),
+        )
+    } else {
+        (named.label, named.meaning)
+    };
     SlotName {
         name: named.name,
-        label: named.label,
-        meaning: named.meaning,
+        label,
+        meaning,
         role,
     }
 }
