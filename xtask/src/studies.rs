@@ -367,6 +367,8 @@ pub enum Effect {
     Reversal,
     /// [`Hidden::ZeroDrift`], µm/min.
     ZeroDrift,
+    /// [`Hidden::ScaleDrift`], τ 300–1800 s, ppm.
+    ScaleDrift,
     /// [`Hidden::Squareness`] EC0Y (Y to X), µrad.
     Squareness,
     /// [`Hidden::TrackerScale`], ppm.
@@ -392,10 +394,11 @@ pub enum Effect {
 
 impl Effect {
     /// Every effect, in declaration order.
-    pub const ALL: [Effect; 13] = [
+    pub const ALL: [Effect; 14] = [
         Effect::Pitch,
         Effect::Reversal,
         Effect::ZeroDrift,
+        Effect::ScaleDrift,
         Effect::Squareness,
         Effect::TrackerScale,
         Effect::PivotDrift,
@@ -421,6 +424,7 @@ impl Effect {
             Effect::Pitch => "periodic pitch of X",
             Effect::Reversal => "reversal",
             Effect::ZeroDrift => "linear zero drift",
+            Effect::ScaleDrift => "thermal expansion of X growing in time",
             Effect::Squareness => "extra squareness EC0Y",
             Effect::TrackerScale => "tracker length scale",
             Effect::PivotDrift => "thermal drift of EX0B",
@@ -447,6 +451,10 @@ impl Effect {
             Effect::Reversal => Hidden::Reversal { um: sign * size },
             Effect::ZeroDrift => Hidden::ZeroDrift {
                 um_per_min: sign * size,
+            },
+            Effect::ScaleDrift => Hidden::ScaleDrift {
+                ppm: sign * size,
+                tau_s: rng.random_range(300.0..=1800.0),
             },
             Effect::Squareness => Hidden::Squareness {
                 pair: 0,
@@ -494,7 +502,7 @@ impl Effect {
             Effect::Squareness | Effect::AngularPositioning | Effect::WormGear | Effect::BTilt => {
                 "µrad"
             }
-            Effect::TrackerScale => "ppm",
+            Effect::TrackerScale | Effect::ScaleDrift => "ppm",
             _ => "µm",
         }
     }
@@ -506,6 +514,7 @@ pub fn power_plan() -> Vec<(Kind, Effect, Vec<f64>)> {
         (Kind::Axis, Effect::Pitch, vec![0.5, 1.0, 2.0, 3.0]),
         (Kind::Axis, Effect::Reversal, vec![0.5, 1.0, 2.0, 3.0]),
         (Kind::Axis, Effect::ZeroDrift, vec![0.02, 0.05, 0.1, 0.2]),
+        (Kind::Axis, Effect::ScaleDrift, vec![2.0, 5.0, 10.0, 20.0]),
         (Kind::Tracker, Effect::Pitch, vec![0.5, 1.0, 2.0, 3.0]),
         (
             Kind::Tracker,
@@ -564,6 +573,7 @@ pub fn coverage_plan() -> Vec<(Kind, Effect, f64)> {
         (Kind::Axis, Effect::Pitch, 2.0),
         (Kind::Axis, Effect::Reversal, 1.0),
         (Kind::Axis, Effect::ZeroDrift, 0.1),
+        (Kind::Axis, Effect::ScaleDrift, 10.0),
         // A size whose power cell showed fewer than 95 % within 2 u (about a second each).
         (Kind::Rtest, Effect::PivotDrift, 10.0),
         // A harmonic of a turn, whose period is exact (no period uncertainty in its size's).
@@ -614,7 +624,7 @@ pub fn names_effect(effect: &TrueEffect, finding: &str) -> bool {
         EffectKind::InstrumentScale => finding.contains("tracker scale"),
         EffectKind::Drift => {
             finding.contains("drift")
-                && !finding.contains("scale")
+                && finding.contains("scale") == hint.contains("scale")
                 && (hint == "drift" || finding.contains(hint))
         }
         EffectKind::AngularPositioning => {
@@ -906,15 +916,19 @@ pub fn stated_out_of_reach(effect: &TrueEffect, o: &Outcome) -> bool {
 /// would name it is listed as not separable from the model, or those that would name it have
 /// detection limits ([`mte_diagnose::DetectionLimit`]) and at the effect's period (where it has
 /// one; else at the variant the data are most sensitive to) each is above the effect's size or
-/// not separable from the model.
+/// not separable from the model. A first-order drift's size (its asymptote) is compared with the
+/// first-order candidates' limits only.
 pub fn stated_below_limit(effect: &TrueEffect, o: &Outcome) -> bool {
     if o.not_separable.iter().any(|n| names_effect(effect, n)) {
         return true;
     }
+    // A first-order drift's size is its asymptote, which the limits of the first-order
+    // candidates state (a linear drift's limit is a rate).
     let mut limits = o
         .detection_limits
         .iter()
         .filter(|l| names_effect(effect, &l.name))
+        .filter(|l| effect.record_change.is_none() || l.name.ends_with(" exp"))
         .peekable();
     limits.peek().is_some()
         && limits.all(|l| {

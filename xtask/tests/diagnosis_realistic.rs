@@ -70,6 +70,17 @@ fn hidden_axis_effects_are_named_and_sized() {
             c.named_right
         );
     }
+    // The screw expanding as the machine warms: the scale drifting and nothing else, its change
+    // over the measured time within 2 u whatever form (linear, first-order) it is found in.
+    let c = &studies::power(Kind::Axis, Effect::ScaleDrift, &[15.0], 6, SEED)[0];
+    assert_eq!(c.errors, 0);
+    assert_eq!(c.alone_explained, c.n, "{:?}", c.names);
+    assert!(
+        c.change_within_2u.is_some_and(|k| k + 1 >= c.named_right),
+        "change within 2 u in {:?} of {}",
+        c.change_within_2u,
+        c.named_right
+    );
 }
 
 #[test]

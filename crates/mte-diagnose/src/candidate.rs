@@ -434,17 +434,33 @@ pub fn physical_effects(
                 let values = v.values.clone();
                 if *positioning && !rotary {
                     let cols = slot.modulated(&values, &|s| DMat::from_column_slice(s.len(), 1, s));
-                    out.push(Box::new(
-                        term(
-                            " scale",
-                            format!("scale error of {axis} ({})", slot.name),
-                            format!("positioning error of {axis} growing linearly with position: a scale (pitch or thermal expansion) error of its measuring system"),
-                            Family::Scale,
-                            cols,
-                            Quantity::Ratio,
-                        )
-                        .exposed_by(axis.clone()),
-                    ));
+                    let scale = term(
+                        " scale",
+                        format!("scale error of {axis} ({})", slot.name),
+                        format!("positioning error of {axis} growing linearly with position: a scale (pitch or thermal expansion) error of its measuring system"),
+                        Family::Scale,
+                        cols,
+                        Quantity::Ratio,
+                    )
+                    .exposed_by(axis.clone());
+                    // The scale changing in time: the screw or scale expands as the machine
+                    // warms, about the axis' zero (a fixed bearing elsewhere adds a drift of
+                    // the axis' zero, its own candidate).
+                    if let Some(settling) = &settling {
+                        let reference = slot.reference.as_ref().map(|r| Reference {
+                            column: r
+                                .column
+                                .component_mul(&DVec::from_column_slice(&r.coordinate)),
+                            ..r.clone()
+                        });
+                        for drift in drift_candidates(&scale, reference.as_ref(), settling) {
+                            out.push(Box::new(Requires {
+                                term: scale.name.clone(),
+                                inner: drift,
+                            }));
+                        }
+                    }
+                    out.push(Box::new(scale));
                 }
                 // The linear part of a straightness is a squareness, which the catalogue names.
                 let first = if *straightness || (*positioning && !rotary) {
@@ -1400,6 +1416,7 @@ fn drift_candidates(
     let q = constant.coefficients[0].1;
     let rate = match q {
         Quantity::Angle => Quantity::AngleRate,
+        Quantity::Ratio => Quantity::RatioRate,
         _ => Quantity::LengthRate,
     };
     let col = constant.columns.column(0);

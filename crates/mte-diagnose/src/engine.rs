@@ -737,7 +737,10 @@ fn conclude(
 
     // The final model. A cause whose size the data do not determine once the uncertainty of its
     // period or time constant is counted (every estimate within 2 u of zero) is not earned: it
-    // leaves, the least determined first, with what builds on it.
+    // leaves, the least determined first. What builds on it and was earned beside it stays, to
+    // be judged by its own size: a scale that is zero while the machine is cold and drifts as
+    // it warms is the drift alone. (A cause the model or the base's orders hold leaves with what
+    // builds on it.)
     let mut chosen = search.chosen;
     if thinned.is_some() {
         // Periods and time constants found on the thinned copy, refined on all observations.
@@ -845,7 +848,7 @@ fn conclude(
             });
             rests_on_orders.push(causes[k].name.clone());
         }
-        pruned.extend(searcher.remove(&mut chosen, k, &base_fit));
+        pruned.extend(searcher.remove(&mut chosen, k, &base_fit, held.is_some()));
     };
     let finals = searcher.removal_p_values(&chosen, &base_fit, &fit);
     let mut findings: Vec<Finding> = chosen
@@ -2941,7 +2944,7 @@ impl Searcher<'_> {
                 }
             }
             let Some((j, _, _)) = weakest else { break };
-            pruned.extend(self.remove(chosen, j, base_fit));
+            pruned.extend(self.remove(chosen, j, base_fit, true));
         }
         pruned
     }
@@ -2953,15 +2956,22 @@ impl Searcher<'_> {
         (x, fit)
     }
 
-    /// Removes chosen term `j` and what builds on it, and chooses the period or time constant of
-    /// each term that stays again without them ([`Searcher::rechoose`]); returns the names
-    /// removed, `j`'s first. `base_fit`: the fit of this searcher's base, or of a first part of
-    /// it.
-    fn remove(&self, chosen: &mut Vec<Chosen>, j: usize, base_fit: &Projector) -> Vec<String> {
+    /// Removes chosen term `j` and, with `dependents`, what builds on it, and chooses the period
+    /// or time constant of each term that stays again without them ([`Searcher::rechoose`]);
+    /// returns the names removed, `j`'s first. `base_fit`: the fit of this searcher's base, or
+    /// of a first part of it.
+    fn remove(
+        &self,
+        chosen: &mut Vec<Chosen>,
+        j: usize,
+        base_fit: &Projector,
+        dependents: bool,
+    ) -> Vec<String> {
         let name = chosen.remove(j).term.name;
         let mut removed = vec![name];
         chosen.retain(|c| {
-            let dependent = self.chosen_candidate(c).requires() == Some(removed[0].as_str());
+            let dependent =
+                dependents && self.chosen_candidate(c).requires() == Some(removed[0].as_str());
             if dependent {
                 removed.push(c.term.name.clone());
             }
@@ -3062,7 +3072,7 @@ impl Searcher<'_> {
             let Some((k, _)) = leaving(&held, |k| z[k]) else {
                 return (x, fit);
             };
-            self.remove(chosen, k, base_fit);
+            self.remove(chosen, k, base_fit, true);
         }
     }
 

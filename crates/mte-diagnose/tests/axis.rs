@@ -23,6 +23,10 @@ struct Hidden {
     /// A first-order settling of the zero: its size and time constant.
     zero_settling_um: f64,
     zero_settling_tau_s: f64,
+    /// The screw expanding about X = 0 as it warms: its final scale change (ppm) and time
+    /// constant.
+    expansion_ppm: f64,
+    expansion_tau_s: f64,
     /// One gross error: the reading at this index (in the order written) is off by µm.
     spike: Option<(usize, f64)>,
     /// A second, longer periodic error (a wave of the screw or the guideway).
@@ -59,6 +63,10 @@ fn write_dataset_at(name: &str, targets: &[f64], hidden: Hidden, seed: u64) -> P
                 + hidden.scale_ppm * 1e-3 * x
                 + hidden.zero_drift_um_per_min * t / 60.0
                 + hidden.zero_settling_um * (1.0 - (-t / hidden.zero_settling_tau_s.max(1.0)).exp())
+                + hidden.expansion_ppm
+                    * 1e-3
+                    * x
+                    * (1.0 - (-t / hidden.expansion_tau_s.max(1.0)).exp())
                 + hidden.spike.filter(|s| s.0 == index).map_or(0.0, |s| s.1)
         },
     )
@@ -169,6 +177,43 @@ fn a_drift_states_its_change_over_the_measured_time() {
             "{name}: change {v:.3} ± {u:.3} µm, truth {truth_um:.3} µm"
         );
     }
+}
+
+/// The screw expands as the machine warms (semi-closed loop: the encoder on the motor does not
+/// see it): the positioning error grows along X and in time. It is the scale drifting with a
+/// time constant, sized as its final change and its change over the measured time, and nothing
+/// else (not the zero drifting beside it).
+#[test]
+fn a_screw_expanding_as_it_warms_is_the_scale_drifting_with_its_time_constant() {
+    let hidden = Hidden {
+        expansion_ppm: 12.0,
+        expansion_tau_s: 1200.0,
+        ..Hidden::default()
+    };
+    let d = run(&write_dataset("expansion", hidden, 23));
+    let names: Vec<&str> = d.findings.iter().map(|f| f.name.as_str()).collect();
+    assert_eq!(
+        names,
+        ["EXX scale drift exp"],
+        "{}",
+        mte_diagnose::report::markdown(&d, "expansion")
+    );
+    let f = &d.findings[0];
+    let estimate = |name: &str| {
+        f.estimates
+            .iter()
+            .find(|e| e.name == name)
+            .map(|e| (e.value * 1e6, e.uncertainty * 1e6))
+            .unwrap_or_else(|| panic!("no {name}: {f:?}"))
+    };
+    let (v, u) = estimate("EXX scale change");
+    assert!(within(v, u, 12.0, 2.0), "final change {v:.2} ± {u:.2} ppm");
+    let (v, u) = estimate("EXX scale change over the measured time");
+    let truth = 12.0 * (1.0 - (-LAST_T_S / 1200.0_f64).exp());
+    assert!(
+        within(v, u, truth, 2.0),
+        "change over the measured time {v:.2} ± {u:.2} ppm, truth {truth:.2}"
+    );
 }
 
 /// A settling faster than the interval between two visits of a target (808 s) shows in how the

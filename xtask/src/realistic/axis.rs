@@ -94,6 +94,13 @@ impl Programme<'_> {
 /// A hidden effect as a function of (x mm, direction ±1, t s), µm.
 type Part = Box<dyn Fn(f64, f64, f64) -> f64>;
 
+/// The time of the last reading of [`Programme::write`]: `runs` × two directions of `targets`
+/// readings `dt` apart, a pause between directions.
+fn programme_duration(runs: usize, targets: usize, dt: f64, pause: f64) -> f64 {
+    let sweeps = 2 * runs;
+    (sweeps * targets) as f64 * dt + (sweeps - 1) as f64 * pause - dt
+}
+
 pub(crate) fn write(spec: &Spec, rng: &mut ChaCha8Rng, dir: &Path) -> std::io::Result<Truth> {
     let stroke = rng.random_range(500.0..=1000.0_f64).round();
     let n_targets = rng.random_range(15..=25);
@@ -187,6 +194,23 @@ pub(crate) fn write(spec: &Spec, rng: &mut ChaCha8Rng, dir: &Path) -> std::io::R
                     record_change: None,
                 });
             }
+            Hidden::ScaleDrift { ppm, tau_s } => {
+                parts.push(Box::new(move |x, _, t| {
+                    ppm * 1e-3 * x * (1.0 - (-t / tau_s).exp())
+                }));
+                let t_last = programme_duration(runs, targets.len(), dt, pause);
+                effects.push(TrueEffect {
+                    iso_name_hint: "EXX scale".into(),
+                    kind: EffectKind::Drift,
+                    size: ppm,
+                    unit: "ppm",
+                    value: ppm * 1e-6,
+                    signed: true,
+                    period: None,
+                    detail: format!("thermal expansion about the zero, τ = {tau_s:.0} s"),
+                    record_change: Some(ppm * 1e-6 * (1.0 - (-t_last / tau_s).exp())),
+                });
+            }
             Hidden::Sawtooth {
                 axis: 0,
                 amplitude_um,
@@ -209,12 +233,7 @@ pub(crate) fn write(spec: &Spec, rng: &mut ChaCha8Rng, dir: &Path) -> std::io::R
                 });
             }
             Hidden::RiseFall { um, peak } => {
-                // The time of the last reading (the loop below: runs × two directions of
-                // `targets` readings `dt` apart, a pause between directions).
-                let sweeps = 2 * runs;
-                let duration =
-                    (sweeps * targets.len()) as f64 * dt + (sweeps - 1) as f64 * pause - dt;
-                let tau_s = peak * duration;
+                let tau_s = peak * programme_duration(runs, targets.len(), dt, pause);
                 parts.push(Box::new(move |_, _, t| {
                     um * (t / tau_s) * (1.0 - t / tau_s).exp()
                 }));

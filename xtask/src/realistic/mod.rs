@@ -151,6 +151,14 @@ pub enum Hidden {
         /// Time constant, s.
         tau_s: f64,
     },
+    /// First-order thermal expansion of the axis' screw or scale about its zero (the fixed
+    /// bearing at the home end), `ppm · 10⁻⁶ · x · (1 − exp(−t/τ))` (axis).
+    ScaleDrift {
+        /// Final scale change, ppm.
+        ppm: f64,
+        /// Time constant, s.
+        tau_s: f64,
+    },
     /// Linear drift of the zero in time, µm/min (axis).
     ZeroDrift {
         /// Rate, µm/min.

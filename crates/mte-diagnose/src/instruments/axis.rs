@@ -1,6 +1,6 @@
 //! Bidirectional positioning runs of one axis (laser interferometer, ISO 230-2 style).
 
-use mte_linalg::{DMat, DVec};
+use mte_linalg::DVec;
 
 use super::machine::{LINEAR_LIMIT_MM, ROTARY_LIMIT_DEG, read_times};
 use crate::Result;
@@ -8,7 +8,7 @@ use crate::candidate::{SlotEffect, SlotRole};
 use crate::data::{Observations, Variable, VariableKind};
 use crate::dataset::{ManifestFile, dataset_manifest};
 use crate::model::{DriftOf, Effects, ObservationModel};
-use crate::term::{Family, Quantity, Summary, Term};
+use crate::term::{Family, Quantity, Term};
 
 dataset_manifest!(
     /// The manifest of axis runs (`"kind": "axis"`).
@@ -192,7 +192,8 @@ impl ObservationModel for AxisRuns {
     }
 
     /// The axis' positioning error (its own component error, `EXX`) and the instrument's zero;
-    /// with a time column, a scale drift (thermal expansion growing in time).
+    /// with a time column, the library adds the drift of the zero and of the scale (thermal
+    /// expansion growing in time).
     fn effects(&self) -> Effects {
         let obs = &self.observations;
         let (n, quantity, axis) = (obs.len(), obs.quantity, &self.axis);
@@ -221,28 +222,9 @@ impl ObservationModel for AxisRuns {
             separated_by: None,
             reference: None,
         };
-        let mut candidates: Vec<Box<dyn crate::Candidate>> = Vec::new();
-        if let (Some(t), Some(position)) =
-            (obs.variable_of_kind(VariableKind::Time), obs.variable(axis))
-        {
-            let t0 = t.values.iter().copied().fold(f64::INFINITY, f64::min);
-            let col = DMat::from_fn(n, 1, |i, _| position.values[i] * (t.values[i] - t0));
-            candidates.push(Box::new(Term {
-                name: format!("{iso} scale drift"),
-                label: format!("thermal expansion of {axis} growing in time"),
-                meaning: format!("the scale of {axis} changes while the machine warms up (thermal expansion of the screw or scale)"),
-                family: Family::Drift { time_constant_s: None },
-                coefficients: vec![(format!("{iso} scale rate"), Quantity::RatioRate)],
-                columns: col,
-                summary: Summary::EachCoefficient,
-                exposed_by: Some("t".into()),
-                separated_by: None,
-            }));
-        }
         Effects {
             errors: vec![slot],
             instrument: vec![offset],
-            candidates,
             drift: DriftOf::Instrument,
             ..Effects::default()
         }
