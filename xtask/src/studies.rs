@@ -603,7 +603,8 @@ pub fn openworld_plan() -> Vec<(Kind, Effect, f64)> {
 /// squareness → the ISO name or its equivalent in the other axis (`EC0Y` ≡ `EC0X`,
 /// `EA0Z` ≡ `EA0Y`, `EB0Z` ≡ `EB0X`); reversal → contains `reversal`; instrument scale →
 /// `tracker scale`; drift → contains `drift` (and the parameter's name where there is one, e.g.
-/// `EX0B … drift`), not a scale drift; angular positioning → contains `ECC`/`EBB` (not a drift,
+/// `EX0B … drift`; a scale drift for the axis' thermal expansion, whose hint is `EXX scale`,
+/// else not a scale drift); angular positioning → contains `ECC`/`EBB` (not a drift,
 /// reversal or scale of it) or the axis' name with `periodic`/`harmonic`; location → starts with the ISO name (`EA0B`, `EA0B abs`),
 /// not a drift of it;
 /// open-world effects are never named right.
@@ -1427,7 +1428,8 @@ each finding so (no confident name).\n\n\
 One hidden effect on top of the ordinary errors. *any finding*: the diagnosis reported \
 something; *named right*: a finding names the effect (mapping: `xtask::studies::names_effect` — \
 periodic → `E<ax><ax> periodic`; squareness → `EC0Y`/`EC0X` …; reversal → `… reversal`; tracker \
-scale → `tracker scale`; drift → `… drift` naming the parameter, e.g. `EX0B … drift`; angular \
+scale → `tracker scale`; drift → `… drift` naming the parameter, e.g. `EX0B … drift`, \
+`EZ0[tool] … drift`, `EXX scale drift …` for a thermal expansion; angular \
 positioning of C (a harmonic, a worm gear) → `ECC …` (not a drift, reversal or scale of it) or a C `periodic`/`harmonic` finding; B tilt → `EA0B …`); *else \
 reported as not separable*: no finding names it, but a finding's alternatives the data cannot tell \
 apart do, or — for the tracker's length scale, which the user's model with every axis' scale can \
@@ -1462,7 +1464,11 @@ explained*: of all datasets, those where the effect is named right, no finding n
 else, and the verdict is that the causes found explain the data (residuals consistent with the \
 noise, no structure left) — what a user should see. Pitch periods \
 5–40 mm, pivot drift τ 600–3600 s, C harmonics 1–4, a rotary table's worm gear 24–90 teeth \
-(cycles per turn) drawn per dataset; the rotary table's user model has its smooth angular \
+(cycles per turn) drawn per dataset; the spindle's thermal growth moves the tool point along \
+the spindle (on the head, turned with B), first order with τ 600–3600 s, named by a drift of \
+the tool's place `EZ0[tool]`; an axis' thermal expansion is its screw growing about the axis' \
+zero (the fixed bearing at the home end), `ppm · x · (1 − e^(−t/τ))` with τ 300–1800 s, named \
+by a drift of its scale (`EXX scale drift`, its size the final scale change); the rotary table's user model has its smooth angular \
 positioning error (harmonics up to the second, completed by the diagnosis as the data ask), \
 not the worm gear's.\n\n\
 "

@@ -113,3 +113,37 @@ fn realistic_points_fit_the_nominal_machine_and_name_nothing_when_clean() {
         d.extended.sigma0
     );
 }
+
+#[test]
+fn a_linear_axis_error_seen_from_the_rotary_table_shows_along_its_axis_in_the_beds_directions() {
+    // The user's model without the scale of X (the bundled c-stage dataset's case): it is found,
+    // and its plot's channels are the bed's directions although the instrument rides on the C
+    // table: the scale moves the target along X only, a line against X in `dx` and nothing in
+    // `dy` and `dz` whatever C's angle (in the table's frame it spread over dx and dy with C).
+    let dir = std::env::temp_dir().join(format!("mte-points-scale-{}", std::process::id()));
+    let truth = write_points(1, &dir, true, None).expect("write dataset");
+    let d = load(&truth.manifest)
+        .expect("load points dataset")
+        .diagnose(&DiagnoseParams::default())
+        .expect("diagnose");
+    let _ = std::fs::remove_dir_all(&dir);
+    let plot = d
+        .residual_series
+        .iter()
+        .find(|s| s.finding.as_deref() == Some("EXX scale"))
+        .unwrap_or_else(|| panic!("no plot of EXX scale: {:?}", d.findings));
+    let largest = |channel: usize| {
+        plot.effect
+            .iter()
+            .zip(&plot.channel)
+            .filter(|(_, c)| **c == channel)
+            .fold(0.0_f64, |m, (e, _)| m.max(e.abs()))
+    };
+    assert!(
+        largest(0) > 1e-3 && largest(1) < 1e-4 * largest(0) && largest(2) < 1e-4 * largest(0),
+        "the scale's effect in dx, dy, dz up to {:.2e}, {:.2e}, {:.2e} mm",
+        largest(0),
+        largest(1),
+        largest(2)
+    );
+}

@@ -21,9 +21,12 @@
 //!
 //! The nominal machine is fitted first (Gauss–Newton on the poses and the target offset);
 //! then every residual is turned into the frame of the machine side that carries the
-//! instrument, `v = Rₛᵀ(m − tₛ) − x(q)`, so the three channels are machine directions and the
-//! noise stays independent and isotropic. A machine error changes x(q) by the first-order
-//! kinematics; a pose change adds `δt + ω × x`; a target change `A(q)·δo`.
+//! instrument, `v = Rₛᵀ(m − tₛ) − x(q)`, and from there into the bed's, `B(q)·v` with `B(q)`
+//! the nominal rotation of that side at the row's axes: the three channels are the bed's
+//! directions (a linear axis' error shows as a line against its axis even when the instrument
+//! rides on a rotary table) and the noise stays independent and isotropic. A machine error
+//! changes x(q) by the first-order kinematics; a pose change adds `δt + ω × x`; a target change
+//! `A(q)·δo`; every effect is turned by `B(q)` as the residual is.
 
 use mte_kinematics::Machine;
 use mte_linalg::{DMat, DVec, Mat3, Vec3};
@@ -84,6 +87,9 @@ pub struct Points {
     x: Vec<Vec3>,
     /// Instrument translation per set-up, turned into the instrument side's frame (`Rₛᵀtₛ`).
     origin: Vec<Vec3>,
+    /// Per row, the nominal rotation of the instrument side's frame in the bed's: residuals and
+    /// effects are turned by it.
+    to_bed: Vec<Mat3>,
     title: String,
 }
 
@@ -175,10 +181,21 @@ impl Points {
         )
         .map_err(|detail| file.error(detail))?;
         let n = 3 * rows;
+        let to_bed: Vec<Mat3> = q
+            .iter()
+            .map(|qr| {
+                let poses = machine.branch_poses(qr, &[]);
+                let side = match side {
+                    Side::Tool => poses.workpiece_in_base,
+                    Side::Workpiece => poses.tool_in_base,
+                };
+                *side.rotation.to_rotation_matrix().matrix()
+            })
+            .collect();
         let residual: Vec<Vec3> = (0..rows)
             .map(|r| {
                 let (rot, t) = &fit.poses[setup_of[r]];
-                rot.transpose() * (m[r] - t) - fit.x[r]
+                to_bed[r] * (rot.transpose() * (m[r] - t) - fit.x[r])
             })
             .collect();
         let per_obs = |v: &[f64]| -> Vec<f64> { (0..n).map(|i| v[i / 3]).collect() };
@@ -217,6 +234,7 @@ impl Points {
         Ok((
             Points {
                 origin: fit.poses.iter().map(|(r, t)| r.transpose() * t).collect(),
+                to_bed,
                 x: fit.x,
                 offset: fit.offset,
                 offset_fitted: manifest.target_mm.is_none(),
@@ -407,6 +425,7 @@ impl ObservationModel for Points {
                     Side::Tool => dp + dtheta.cross(&(*rot * offset)),
                     Side::Workpiece => -(rot.transpose() * (dp + dtheta.cross(&(offset - tip)))),
                 };
+                let dx = self.to_bed[r] * dx;
                 for k in 0..3 {
                     s[(3 * r + k, j)] = dx[k];
                 }
@@ -431,7 +450,7 @@ impl ObservationModel for Points {
             role: SlotRole::Constant { family: Family::Instrument },
             column: DVec::from_fn(n, |i, _| {
                 let r = i / 3;
-                (self.x[r] + self.origin[self.setup_of[r]])[i % 3]
+                (self.to_bed[r] * (self.x[r] + self.origin[self.setup_of[r]]))[i % 3]
             }),
             separated_by: Some("a calibrated reference length measured by the instrument".into()),
             reference: None,
@@ -445,7 +464,13 @@ impl ObservationModel for Points {
                     format!("instrument position in {letter} (set-up {id})"),
                     "where the instrument stands relative to the machine",
                     Family::Base,
-                    DVec::from_fn(n, |i, _| if on(i) && i % 3 == a { 1.0 } else { 0.0 }),
+                    DVec::from_fn(n, |i, _| {
+                        if on(i) {
+                            self.to_bed[i / 3][(i % 3, a)]
+                        } else {
+                            0.0
+                        }
+                    }),
                     Quantity::Length,
                 ));
             }
@@ -458,7 +483,7 @@ impl ObservationModel for Points {
                     Family::Base,
                     DVec::from_fn(n, |i, _| {
                         if on(i) {
-                            axis.cross(&self.x[i / 3])[i % 3]
+                            (self.to_bed[i / 3] * axis.cross(&self.x[i / 3]))[i % 3]
                         } else {
                             0.0
                         }
@@ -470,7 +495,8 @@ impl ObservationModel for Points {
         let a: Vec<Mat3> = self
             .frames
             .iter()
-            .map(|f| offset_jacobian(f, self.side))
+            .zip(&self.to_bed)
+            .map(|(f, b)| b * offset_jacobian(f, self.side))
             .collect();
         if self.offset_fitted {
             for (k, letter) in ['x', 'y', 'z'].into_iter().enumerate() {
