@@ -365,6 +365,8 @@ pub enum Effect {
     Pitch,
     /// [`Hidden::Reversal`], µm.
     Reversal,
+    /// [`Hidden::ReversalGrowing`], µm at the end of the travel.
+    ReversalGrowing,
     /// [`Hidden::ZeroDrift`], µm/min.
     ZeroDrift,
     /// [`Hidden::ScaleDrift`], τ 300–1800 s, ppm.
@@ -394,9 +396,10 @@ pub enum Effect {
 
 impl Effect {
     /// Every effect, in declaration order.
-    pub const ALL: [Effect; 14] = [
+    pub const ALL: [Effect; 15] = [
         Effect::Pitch,
         Effect::Reversal,
+        Effect::ReversalGrowing,
         Effect::ZeroDrift,
         Effect::ScaleDrift,
         Effect::Squareness,
@@ -423,6 +426,7 @@ impl Effect {
         match self {
             Effect::Pitch => "periodic pitch of X",
             Effect::Reversal => "reversal",
+            Effect::ReversalGrowing => "reversal growing along X",
             Effect::ZeroDrift => "linear zero drift",
             Effect::ScaleDrift => "thermal expansion of X growing in time",
             Effect::Squareness => "extra squareness EC0Y",
@@ -449,6 +453,7 @@ impl Effect {
                 period_mm: rng.random_range(5.0..=40.0),
             },
             Effect::Reversal => Hidden::Reversal { um: sign * size },
+            Effect::ReversalGrowing => Hidden::ReversalGrowing { um: sign * size },
             Effect::ZeroDrift => Hidden::ZeroDrift {
                 um_per_min: sign * size,
             },
@@ -513,6 +518,7 @@ pub fn power_plan() -> Vec<(Kind, Effect, Vec<f64>)> {
     vec![
         (Kind::Axis, Effect::Pitch, vec![0.5, 1.0, 2.0, 3.0]),
         (Kind::Axis, Effect::Reversal, vec![0.5, 1.0, 2.0, 3.0]),
+        (Kind::Axis, Effect::ReversalGrowing, vec![1.0, 2.0, 4.0]),
         (Kind::Axis, Effect::ZeroDrift, vec![0.02, 0.05, 0.1, 0.2]),
         (Kind::Axis, Effect::ScaleDrift, vec![2.0, 5.0, 10.0, 20.0]),
         (Kind::Tracker, Effect::Pitch, vec![0.5, 1.0, 2.0, 3.0]),
@@ -1468,7 +1474,9 @@ noise, no structure left) — what a user should see. Pitch periods \
 the spindle (on the head, turned with B), first order with τ 600–3600 s, named by a drift of \
 the tool's place `EZ0[tool]`; an axis' thermal expansion is its screw growing about the axis' \
 zero (the fixed bearing at the home end), `ppm · x · (1 − e^(−t/τ))` with τ 300–1800 s, named \
-by a drift of its scale (`EXX scale drift`, its size the final scale change); the rotary table's user model has its smooth angular \
+by a drift of its scale (`EXX scale drift`, its size the final scale change); a reversal \
+growing along X from none at the start of the travel to its size at the end is named by the \
+reversal (its truth the mean over the targets) with its change along X (`EXX reversal poly1`); the rotary table's user model has its smooth angular \
 positioning error (harmonics up to the second, completed by the diagnosis as the data ask), \
 not the worm gear's.\n\n\
 "

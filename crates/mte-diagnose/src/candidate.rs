@@ -542,6 +542,36 @@ pub fn physical_effects(
                             )
                             .exposed_by("direction"),
                         ));
+                        // A reversal that changes along the axis (the backlash of a screw worn
+                        // where the axis works most, friction that varies along the guideway),
+                        // beside the reversal itself: its change as a polynomial in the axis
+                        // coordinate (ISO 230-2 states the reversal at every target). (Over a
+                        // full turn a rotary axis' reversal would change as harmonics: not
+                        // searched.)
+                        let top = if full_turn {
+                            0
+                        } else {
+                            2.min(highest_order(&values, false))
+                        };
+                        for degree in 1..=top {
+                            let along = legendre_columns(&values, 1..=degree);
+                            let cols = DMat::from_fn(n, degree, |i, j| {
+                                slot.column[i] * 0.5 * d[i] * along[(i, j)]
+                            });
+                            let changing = term(
+                                &format!(" reversal poly{degree}"),
+                                format!("reversal error of {axis} changing along {axis}, polynomial up to degree {degree}"),
+                                format!("the reversal of {axis} is not the same at every position: larger where the screw is worn or the guideway's friction higher (the coefficients are Legendre's over the measured travel: the first is half the reversal's change from one end to the other)"),
+                                Family::Reversal,
+                                cols,
+                                slot.quantity,
+                            )
+                            .exposed_by(axis.clone());
+                            out.push(Box::new(Requires {
+                                term: format!("{} reversal", slot.name),
+                                inner: Box::new(changing),
+                            }));
+                        }
                     }
                 }
             }

@@ -16,6 +16,8 @@ const NOISE_UM: f64 = 0.3;
 #[derive(Default, Clone, Copy)]
 struct Hidden {
     reversal_um: f64,
+    /// The reversal's change from the middle of the targets to their far end (larger at +X).
+    reversal_change_um: f64,
     pitch_amplitude_um: f64,
     pitch_period_mm: f64,
     scale_ppm: f64,
@@ -33,6 +35,9 @@ struct Hidden {
     wave_amplitude_um: f64,
     wave_period_mm: f64,
 }
+
+/// The middle of [`dense_targets`] (0 to 701.3 mm).
+const MIDDLE_MM: f64 = 350.65;
 
 /// 101 targets over X ∈ [0, 700] mm at alternating steps of 8.3 and 5.7 mm.
 fn dense_targets() -> Vec<f64> {
@@ -56,6 +61,7 @@ fn write_dataset_at(name: &str, targets: &[f64], hidden: Hidden, seed: u64) -> P
         4.0,
         |x, dir, t, index| {
             2.0 + hidden.reversal_um * 0.5 * dir
+                + hidden.reversal_change_um * 0.5 * dir * (x - MIDDLE_MM) / MIDDLE_MM
                 + hidden.pitch_amplitude_um
                     * (std::f64::consts::TAU * x / hidden.pitch_period_mm.max(1.0) + 0.7).sin()
                 + hidden.wave_amplitude_um
@@ -97,6 +103,33 @@ fn clean_axis_data_yields_no_discovery() {
             "seed {seed}: false discovery {:?}, outliers {:?}",
             d.findings.iter().map(|f| &f.name).collect::<Vec<_>>(),
             d.outliers
+        );
+    }
+}
+
+/// A screw worn where the axis works most: the reversal grows along X (ISO 230-2 states it at
+/// every target). The reversal and its change along X are named, each within 2 u: the mean
+/// reversal over the targets and the change from the middle to the end.
+#[test]
+fn a_reversal_changing_along_the_axis_is_named_with_its_change() {
+    let d = run(&write_dataset(
+        "reversal-changing",
+        Hidden {
+            reversal_um: 2.0,
+            reversal_change_um: 1.2,
+            ..Hidden::default()
+        },
+        12,
+    ));
+    let names: Vec<&str> = d.findings.iter().map(|f| f.name.as_str()).collect();
+    assert_eq!(names, ["EXX reversal", "EXX reversal poly1"], "{names:?}");
+    for (f, truth) in d.findings.iter().zip([2.0, 1.2]) {
+        let e = &f.estimates[0];
+        assert!(
+            within(e.value * 1e3, e.uncertainty * 1e3, truth, 2.0),
+            "{}: {}, truth {truth} µm",
+            f.name,
+            e.text
         );
     }
 }

@@ -180,6 +180,23 @@ pub(crate) fn write(spec: &Spec, rng: &mut ChaCha8Rng, dir: &Path) -> std::io::R
                     record_change: None,
                 });
             }
+            Hidden::ReversalGrowing { um } => {
+                parts.push(Box::new(move |x, sign, _| 0.5 * sign * um * x / stroke));
+                // What the targets show: the reversal's mean over them.
+                let mean =
+                    targets.iter().map(|x| um * x / stroke).sum::<f64>() / targets.len() as f64;
+                effects.push(TrueEffect {
+                    iso_name_hint: "reversal".into(),
+                    kind: EffectKind::Reversal,
+                    size: um,
+                    unit: "um",
+                    value: mean * 1e-3, // plus the ordinary reversal, below
+                    signed: true,
+                    period: None,
+                    detail: format!("growing along X to {um:.2} µm at its end"),
+                    record_change: None,
+                });
+            }
             Hidden::ZeroDrift { um_per_min } => {
                 parts.push(Box::new(move |_, _, t| um_per_min * t / 60.0));
                 effects.push(TrueEffect {
@@ -252,9 +269,11 @@ pub(crate) fn write(spec: &Spec, rng: &mut ChaCha8Rng, dir: &Path) -> std::io::R
             _ => return Err(unsupported(Kind::Axis, h)),
         }
     }
-    for e in &mut effects {
-        if e.kind == EffectKind::Reversal {
-            e.value = reversal_um * 1e-3;
+    for (e, h) in effects.iter_mut().zip(&spec.hidden) {
+        match h {
+            Hidden::Reversal { .. } => e.value = reversal_um * 1e-3,
+            Hidden::ReversalGrowing { .. } => e.value += reversal_um * 1e-3,
+            _ => {}
         }
     }
 

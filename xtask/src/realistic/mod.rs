@@ -126,6 +126,12 @@ pub enum Hidden {
         /// Difference between the directions, µm.
         um: f64,
     },
+    /// A reversal that grows along the axis, from none at its start to `um` at its end (a
+    /// screw worn towards one end), on top of the ordinary reversal (axis).
+    ReversalGrowing {
+        /// Reversal at the end of the travel, µm.
+        um: f64,
+    },
     /// Scale error of every tracker length, ppm (tracker).
     TrackerScale {
         /// ppm.
