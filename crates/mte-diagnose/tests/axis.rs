@@ -249,6 +249,46 @@ fn a_screw_expanding_as_it_warms_is_the_scale_drifting_with_its_time_constant() 
     );
 }
 
+/// An ISO 230-2 export without times: a zero drifting at 0.1 µm/min shows as the zero shifting
+/// from run to run (808 s per run: 1.35 µm a run), each run's offset against the first within
+/// 3 u, and the finding says that a reversal found beside it may be the drift within each run.
+#[test]
+fn a_drift_in_a_table_without_times_is_the_zero_shifting_from_run_to_run() {
+    let path = write_dataset(
+        "drift-no-times",
+        Hidden {
+            zero_drift_um_per_min: 0.1,
+            ..Hidden::default()
+        },
+        24,
+    );
+    let csv = std::fs::read_to_string(path.with_file_name("runs.csv")).unwrap();
+    let without_t: String = csv
+        .lines()
+        .map(|l| {
+            let mut fields: Vec<&str> = l.split(',').collect();
+            fields.remove(3); // run,direction,x_mm,t_s,deviation_um
+            fields.join(",") + "\n"
+        })
+        .collect();
+    std::fs::write(path.with_file_name("runs.csv"), without_t).unwrap();
+    let d = run(&path);
+    let f = d
+        .finding("EXX offset per run")
+        .unwrap_or_else(|| panic!("{:?}", d.findings));
+    assert_eq!(f.estimates.len(), 4);
+    for (k, e) in f.estimates.iter().enumerate() {
+        let truth = (k + 1) as f64 * 808.0 * 0.1 / 60.0;
+        assert!(
+            within(e.value * 1e3, e.uncertainty * 1e3, truth, 3.0),
+            "{}: {}, truth {truth:.2} µm",
+            e.name,
+            e.text
+        );
+    }
+    assert!(f.meaning.contains("reversal"), "{}", f.meaning);
+}
+
 /// A settling faster than the interval between two visits of a target (808 s) shows in how the
 /// differences between consecutive visits shrink from the first target of a run to the last:
 /// at τ = 400 s it is found, and its change over the measured time is sized. Faster than a third

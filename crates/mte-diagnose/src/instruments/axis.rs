@@ -1,6 +1,6 @@
 //! Bidirectional positioning runs of one axis (laser interferometer, ISO 230-2 style).
 
-use mte_linalg::DVec;
+use mte_linalg::{DMat, DVec};
 
 use super::machine::{LINEAR_LIMIT_MM, ROTARY_LIMIT_DEG, read_times};
 use crate::Result;
@@ -8,7 +8,7 @@ use crate::candidate::{SlotEffect, SlotRole};
 use crate::data::{Observations, Variable, VariableKind};
 use crate::dataset::{ManifestFile, dataset_manifest};
 use crate::model::{DriftOf, Effects, ObservationModel};
-use crate::term::{Family, Quantity, Term};
+use crate::term::{Family, Quantity, Summary, Term};
 
 dataset_manifest!(
     /// The manifest of axis runs (`"kind": "axis"`).
@@ -222,9 +222,41 @@ impl ObservationModel for AxisRuns {
             separated_by: None,
             reference: None,
         };
+        // Without times (many ISO 230-2 exports have none) a drift cannot be followed in time,
+        // but the runs, taken one after another, show it as a zero that shifts from run to run.
+        let mut candidates: Vec<Box<dyn crate::Candidate>> = Vec::new();
+        let runs = obs.setup_names.len();
+        if obs.variable_of_kind(VariableKind::Time).is_none() && runs >= 3 {
+            candidates.push(Box::new(Term {
+                name: format!("{iso} offset per run"),
+                label: format!("zero of the {axis} measurement shifting from run to run"),
+                meaning: String::from(
+                    "the zero moves between runs: the machine or the laser's air drifting while the runs are taken. The table states no times: a drift during each run moves the − approach against the + one as a reversal does, so a reversal found beside this holds only if the zero stayed still during each run; a `t_s` column tells the two apart",
+                ),
+                family: Family::Setup,
+                columns: DMat::from_fn(n, runs - 1, |i, k| {
+                    if obs.setup[i] == k + 1 { 1.0 } else { 0.0 }
+                }),
+                coefficients: (1..runs)
+                    .map(|k| {
+                        (
+                            format!(
+                                "{iso} offset, run {} against run {}",
+                                obs.setup_names[k], obs.setup_names[0]
+                            ),
+                            quantity,
+                        )
+                    })
+                    .collect(),
+                summary: Summary::EachCoefficient,
+                exposed_by: Some("setup".into()),
+                separated_by: Some("the time of each reading (`t_s`)".into()),
+            }));
+        }
         Effects {
             errors: vec![slot],
             instrument: vec![offset],
+            candidates,
             drift: DriftOf::Instrument,
             ..Effects::default()
         }
