@@ -460,6 +460,12 @@ impl Effect {
             Effect::ScaleDrift => Hidden::ScaleDrift {
                 ppm: sign * size,
                 tau_s: rng.random_range(300.0..=1800.0),
+                // The fixed bearing at the home end, or anywhere along the travel.
+                fixed: if rng.random_bool(0.5) {
+                    0.0
+                } else {
+                    rng.random_range(0.0..=1.0)
+                },
             },
             Effect::Squareness => Hidden::Squareness {
                 pair: 0,
@@ -1472,9 +1478,11 @@ noise, no structure left) — what a user should see. Pitch periods \
 5–40 mm, pivot drift τ 600–3600 s, C harmonics 1–4, a rotary table's worm gear 24–90 teeth \
 (cycles per turn) drawn per dataset; the spindle's thermal growth moves the tool point along \
 the spindle (on the head, turned with B), first order with τ 600–3600 s, named by a drift of \
-the tool's place `EZ0[tool]`; an axis' thermal expansion is its screw growing about the axis' \
-zero (the fixed bearing at the home end), `ppm · x · (1 − e^(−t/τ))` with τ 300–1800 s, named \
-by a drift of its scale (`EXX scale drift`, its size the final scale change); a reversal \
+the tool's place `EZ0[tool]`; an axis' thermal expansion is its screw growing about its \
+fixed bearing (in half the datasets at the home end, the axis' zero, in the others anywhere \
+along the travel), `ppm · (x − x₀) · (1 − e^(−t/τ))` with τ 300–1800 s, named by a drift of its \
+scale (`EXX scale drift`, or `EXX scale drift exp about a point` with the zero's change and the \
+fixed point; its size the final scale change); a reversal \
 growing along X from none at the start of the travel to its size at the end is named by the \
 reversal (its truth the mean over the targets) with its change along X (`EXX reversal poly1`); the rotary table's user model has its smooth angular \
 positioning error (harmonics up to the second, completed by the diagnosis as the data ask), \

@@ -459,6 +459,16 @@ pub fn physical_effects(
                                 inner: drift,
                             }));
                         }
+                        // The screw fixed at a bearing away from the axis' zero: its scale and
+                        // the axis' zero settle together, with one time constant.
+                        if slot.reference.is_none() {
+                            out.push(Box::new(Requires {
+                                term: scale.name.clone(),
+                                inner: Box::new(expansion_about_a_point(
+                                    slot, axis, &values, settling,
+                                )),
+                            }));
+                        }
                     }
                     out.push(Box::new(scale));
                 }
@@ -1501,6 +1511,56 @@ fn drift_candidates(
         make,
     );
     vec![Box::new(linear), Box::new(exponential)]
+}
+
+/// The first-order thermal expansion of a linear axis about a fixed point its data do not
+/// state (a screw's fixed bearing away from the axis' zero): the positioning error
+/// `(s·x + z)·(1 − e^(−(t − t₀)/τ))` with the axis coordinate x, the final scale change s and
+/// zero change z (the fixed point at x = −z/s), scanned over τ as the first-order drifts are.
+fn expansion_about_a_point(
+    slot: &SlotEffect,
+    axis: &str,
+    values: &[f64],
+    settling: &Settling,
+) -> Scan {
+    let (name, quantity) = (slot.name.clone(), slot.quantity);
+    let axis = axis.to_string();
+    let column = slot.column.clone();
+    let values = values.to_vec();
+    let (t, t0) = (settling.times.clone(), settling.t0);
+    Scan::new(settling.grid.clone(), true, move |tau, rows| {
+        let all: Vec<usize>;
+        let rows = match rows {
+            Some(r) => r,
+            None => {
+                all = (0..t.len()).collect();
+                &all
+            }
+        };
+        let columns = DMat::from_fn(rows.len(), 2, |i, j| {
+            let r = rows[i];
+            let settled = 1.0 - (-(t[r] - t0) / tau).exp();
+            column[r] * settled * if j == 0 { values[r] } else { 1.0 }
+        });
+        Term {
+            name: format!("{name} scale drift exp about a point"),
+            label: format!("thermal expansion of {axis} about a fixed point (first-order)"),
+            meaning: format!(
+                "the screw or scale of {axis} expands as the machine warms about its fixed bearing, away from the axis' zero: its scale and the zero of {axis} settle together with one time constant (the fixed point lies at {axis} = −zero change ÷ scale change)"
+            ),
+            family: Family::Drift {
+                time_constant_s: Some(tau),
+            },
+            columns,
+            coefficients: vec![
+                (format!("{name} scale change"), Quantity::Ratio),
+                (format!("{name} zero change"), quantity),
+            ],
+            summary: Summary::FixedPoint(format!("{name} fixed point")),
+            exposed_by: Some("t".into()),
+            separated_by: None,
+        }
+    })
 }
 
 /// The readings' times and the time constants the first-order drifts scan over them

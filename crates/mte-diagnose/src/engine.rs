@@ -796,7 +796,9 @@ fn conclude(
             at += width;
         }
         let extended_parameters = parameters(&terms, &sol.coef, &cov);
-        let z = |p: &[ParameterEstimate], k: usize| largest_z(&p[base.len() + k].estimates);
+        let z = |p: &[ParameterEstimate], k: usize| {
+            largest_z(&p[base.len() + k].estimates, causes[k].width())
+        };
         let Some((k, held)) = leaving(&held, |k| z(&extended_parameters, k)) else {
             break (
                 terms,
@@ -3063,7 +3065,8 @@ impl Searcher<'_> {
                     at += k;
                     match widening {
                         Ok((_, wide)) => {
-                            (largest_z(&t.estimates(c.as_slice(), &(wide * scale))), None)
+                            let estimates = t.estimates(c.as_slice(), &(wide * scale));
+                            (largest_z(&estimates, t.width()), None)
                         }
                         Err(held) => (0.0, Some(held)),
                     }
@@ -4341,9 +4344,10 @@ impl PowerCurve {
 }
 
 /// The largest |estimate| / u of a term's estimates: below 2 its size is not determined.
-fn largest_z(estimates: &[Estimate]) -> f64 {
+fn largest_z(estimates: &[Estimate], width: usize) -> f64 {
     estimates
         .iter()
+        .take(width)
         .map(|e| e.value.abs() / e.uncertainty.max(1e-300))
         .fold(0.0, f64::max)
 }

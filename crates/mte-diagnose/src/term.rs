@@ -120,6 +120,10 @@ pub enum Summary {
     EachCoefficient,
     /// Two coefficients (a·sin + b·cos) summarised as an amplitude √(a² + b²).
     Amplitude,
+    /// Two coefficients, a scale change s and a zero change z of one axis, each reported, and
+    /// after them (derived, named here) the point that stays, x = −z/s, where the axis'
+    /// expansion is anchored.
+    FixedPoint(String),
 }
 
 /// A named block of design columns: the first-order effect of one physical cause on every
@@ -246,7 +250,24 @@ impl Term {
             quantity,
             text: quantity.format(value, u),
         };
-        match self.summary {
+        match &self.summary {
+            Summary::FixedPoint(name) if coef.len() == 2 => {
+                let (s, z) = (coef[0], coef[1]);
+                let x = -z / s;
+                // Delta method: ∂x/∂(s, z) = (z/s², −1/s).
+                let g = [z / (s * s), -1.0 / s];
+                let var = g[0] * g[0] * cov[(0, 0)]
+                    + 2.0 * g[0] * g[1] * cov[(0, 1)]
+                    + g[1] * g[1] * cov[(1, 1)];
+                let mut out: Vec<Estimate> = (0..2)
+                    .map(|i| {
+                        let (n, q) = &self.coefficients[i];
+                        make(n, coef[i], cov[(i, i)].max(0.0).sqrt(), *q)
+                    })
+                    .collect();
+                out.push(make(name, x, var.max(0.0).sqrt(), Quantity::Distance));
+                out
+            }
             Summary::Amplitude if coef.len() == 2 => {
                 let (a, b) = (coef[0], coef[1]);
                 let amp = a.hypot(b);

@@ -211,9 +211,10 @@ pub(crate) fn write(spec: &Spec, rng: &mut ChaCha8Rng, dir: &Path) -> std::io::R
                     record_change: None,
                 });
             }
-            Hidden::ScaleDrift { ppm, tau_s } => {
+            Hidden::ScaleDrift { ppm, tau_s, fixed } => {
+                let x0 = fixed * stroke;
                 parts.push(Box::new(move |x, _, t| {
-                    ppm * 1e-3 * x * (1.0 - (-t / tau_s).exp())
+                    ppm * 1e-3 * (x - x0) * (1.0 - (-t / tau_s).exp())
                 }));
                 let t_last = programme_duration(runs, targets.len(), dt, pause);
                 effects.push(TrueEffect {
@@ -224,7 +225,7 @@ pub(crate) fn write(spec: &Spec, rng: &mut ChaCha8Rng, dir: &Path) -> std::io::R
                     value: ppm * 1e-6,
                     signed: true,
                     period: None,
-                    detail: format!("thermal expansion about the zero, τ = {tau_s:.0} s"),
+                    detail: format!("thermal expansion about X = {x0:.0} mm, τ = {tau_s:.0} s"),
                     record_change: Some(ppm * 1e-6 * (1.0 - (-t_last / tau_s).exp())),
                 });
             }

@@ -157,13 +157,15 @@ pub enum Hidden {
         /// Time constant, s.
         tau_s: f64,
     },
-    /// First-order thermal expansion of the axis' screw or scale about its zero (the fixed
-    /// bearing at the home end), `ppm · 10⁻⁶ · x · (1 − exp(−t/τ))` (axis).
+    /// First-order thermal expansion of the axis' screw or scale about its fixed bearing at
+    /// `x₀`, `ppm · 10⁻⁶ · (x − x₀) · (1 − exp(−t/τ))` (axis).
     ScaleDrift {
         /// Final scale change, ppm.
         ppm: f64,
         /// Time constant, s.
         tau_s: f64,
+        /// The fixed bearing's place as a fraction of the stroke from the axis' zero.
+        fixed: f64,
     },
     /// Linear drift of the zero in time, µm/min (axis).
     ZeroDrift {
