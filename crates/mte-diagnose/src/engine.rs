@@ -2743,8 +2743,8 @@ impl Searcher<'_> {
         }
     }
 
-    /// Exchange (the replacement step of stepwise selection), once the search has chosen two
-    /// causes or more: each is tried against the causes of its family (a drift against drifts,
+    /// Exchange (the replacement step of stepwise selection): once the search has chosen two
+    /// causes or more, each is tried against the causes of its family (a drift against drifts,
     /// a location error against location errors) that competed in the search's steps (their
     /// shortlists), each at its best time constant or form, the other chosen causes' chosen
     /// again beside it. One that leaves the complete model's χ² lower by more than
@@ -2752,8 +2752,12 @@ impl Searcher<'_> {
     /// takes the cause that best explains the residuals alone: the lines of B and C drifting in
     /// X the same way first look like the tool drifting, and with that in the model the second
     /// line's drift is fitted beside it, though the two lines explain the data and the tool
-    /// does not. Periodic causes (whose components build on each other) and a component error's
-    /// polynomial forms (nested orders of one error) are not exchanged.
+    /// does not. A rival of fewer coefficients (with one cause or more) takes the place of a
+    /// chosen cause when it leaves χ² higher by less than that threshold: what the data cannot
+    /// tell apart, the simpler cause says (the zero of an axis settling, not the axis expanding
+    /// about a point with a scale the data do not need). Periodic causes (whose components
+    /// build on each other) and a component error's polynomial forms (nested orders of one
+    /// error) are not exchanged.
     /// `fit`: the model's fit; returns the exchanges made.
     fn exchange(
         &self,
@@ -2763,7 +2767,7 @@ impl Searcher<'_> {
         fit: &Projector,
     ) -> Vec<Exchange> {
         let mut exchanged = Vec::new();
-        if chosen.len() < 2 {
+        if chosen.is_empty() {
             return exchanged;
         }
         // (A periodic cause's components build on each other; a component error's forms are
@@ -2780,6 +2784,9 @@ impl Searcher<'_> {
             let required = chosen
                 .iter()
                 .any(|c| self.chosen_candidate(c).requires() == Some(name.as_str()));
+            // With other causes, a rival of its family may explain the data better; alone (the
+            // search chose it as the best alone) only a simpler rival may take its place.
+            let simpler_only = chosen.len() < 2;
             if recurs(&chosen[j].term) || required {
                 continue;
             }
@@ -2792,8 +2799,10 @@ impl Searcher<'_> {
                 .filter(|r| r.cv_rms.is_some() && !in_model(&r.name))
                 .filter_map(|r| self.pool.by_name.get(&r.name).copied())
                 .filter(|&ci| {
+                    let width = pool[ci][0].width();
                     same_family(&pool[ci][0].family, &chosen[j].term.family)
-                        && pool[ci][0].width() <= chosen[j].term.width()
+                        && (width < chosen[j].term.width()
+                            || (!simpler_only && width == chosen[j].term.width()))
                         && self.candidate(ci).requires() != Some(name.as_str())
                 })
                 .collect();
@@ -2827,9 +2836,17 @@ impl Searcher<'_> {
                     (trial_fit.rss_w(), trial)
                 })
                 .min_by(|a, b| a.0.total_cmp(&b.0));
-            let Some((trial_rss, mut trial)) =
-                best.filter(|b| b.0 < rss - EXCHANGE_CHI2 * variance)
-            else {
+            // A rival of as many coefficients must leave χ² lower by more than the threshold; a
+            // simpler one must not leave it higher by as much (parsimony: what the data cannot
+            // tell apart, the simpler cause says).
+            let takes_its_place = |b: &(f64, Vec<Chosen>)| {
+                if b.1[j].term.width() < chosen[j].term.width() {
+                    b.0 < rss + EXCHANGE_CHI2 * variance
+                } else {
+                    b.0 < rss - EXCHANGE_CHI2 * variance
+                }
+            };
+            let Some((trial_rss, mut trial)) = best.filter(takes_its_place) else {
                 continue;
             };
             let before = &chosen[j].term;

@@ -298,15 +298,22 @@ pub fn markdown(d: &Diagnosis, title: &str) -> String {
             .exchanged
             .iter()
             .map(|e| {
-                format!(
-                    "{} by {} (χ² lower by {:.1})",
-                    e.replaced, e.by, e.chi2_drop
-                )
+                if e.chi2_drop >= 0.0 {
+                    format!(
+                        "{} by {}, a rival that explains the data better (χ² lower by {:.1})",
+                        e.replaced, e.by, e.chi2_drop
+                    )
+                } else {
+                    format!(
+                        "{} by {}, simpler, which the data do not tell from it (χ² higher by only {:.1})",
+                        e.replaced, e.by, -e.chi2_drop
+                    )
+                }
             })
             .collect();
         let _ = writeln!(
             s,
-            "Chosen during the search and replaced once the model was complete by a rival that, with the other causes fitted, explains the data better: {}.\n",
+            "Chosen during the search and replaced once the model was complete, each rival tried with the other causes fitted: {}.\n",
             swaps.join("; ")
         );
     }
