@@ -109,6 +109,23 @@ fn hidden_tracker_pitch_names_no_other_cause() {
     );
 }
 
+/// The power cell of `effect` at `size` on both R-test machine types (2 datasets each): every
+/// effect named, alone, the data explained; `sized` checks the sizes of those named.
+fn named_alone_on_both_machine_types(
+    effect: Effect,
+    size: f64,
+    sized: impl Fn(&studies::PowerCell) -> bool,
+) {
+    for kind in [Kind::Rtest, Kind::RtestHead] {
+        let cells = studies::power(kind, effect, &[size], 2, SEED);
+        let c = &cells[0];
+        assert_eq!(c.errors, 0);
+        assert_eq!(c.named_right, c.n, "{kind:?}: {:?}", c.names);
+        assert_eq!(c.alone_explained, c.n, "{kind:?}: {:?}", c.names);
+        assert!(sized(c), "{kind:?}: {c:?}");
+    }
+}
+
 #[test]
 fn a_pivot_drift_is_named_alone_and_sized_on_both_machine_types() {
     // The B line's place drifts over repeated cycles: on the trunnion against the C line, on
@@ -116,18 +133,9 @@ fn a_pivot_drift_is_named_alone_and_sized_on_both_machine_types() {
     // has that location error, so the drift of it is the cause to name, and nothing else: the
     // drift's size must not hide the rotary axes' ordinary higher harmonics until a periodic
     // cause stands in for them, nor leave them as unexplained structure.
-    for kind in [Kind::Rtest, Kind::RtestHead] {
-        let cells = studies::power(kind, Effect::PivotDrift, &[20.0], 2, SEED);
-        let c = &cells[0];
-        assert_eq!(c.errors, 0);
-        assert_eq!(c.named_right, c.n, "{kind:?}: {:?}", c.names);
-        assert_eq!(c.alone_explained, c.n, "{kind:?}: {:?}", c.names);
-        assert!(
-            c.estimate_within_2u + 1 >= c.named_right,
-            "{kind:?}: {:?}",
-            c.names
-        );
-    }
+    named_alone_on_both_machine_types(Effect::PivotDrift, 20.0, |c| {
+        c.estimate_within_2u + 1 >= c.named_right
+    });
 }
 
 #[test]
@@ -138,19 +146,9 @@ fn a_spindle_growing_in_z_is_named_alone_and_beside_a_pivot_drift() {
     // through its change during the set-up. Alone it is the tool's place drifting (EZ0[tool]),
     // on both machine types; with the B line drifting too, each is named (or, on the trunnion,
     // said not to be separable from what it is confounded with) and nothing else.
-    for kind in [Kind::Rtest, Kind::RtestHead] {
-        let cells = studies::power(kind, Effect::SpindleDrift, &[10.0], 2, SEED);
-        let c = &cells[0];
-        assert_eq!(c.errors, 0);
-        assert_eq!(c.named_right, c.n, "{kind:?}: {:?}", c.names);
-        assert_eq!(c.alone_explained, c.n, "{kind:?}: {:?}", c.names);
-        assert_eq!(
-            c.change_within_2u,
-            Some(c.named_right),
-            "{kind:?}: {:?}",
-            c.names
-        );
-    }
+    named_alone_on_both_machine_types(Effect::SpindleDrift, 10.0, |c| {
+        c.change_within_2u == Some(c.named_right)
+    });
     let c = combined_cell(Kind::Rtest, Effect::SpindleDrift, 4);
     assert_eq!(c.errors, 0);
     assert_eq!(

@@ -344,6 +344,35 @@ const SMALL: ComponentSizes = ComponentSizes {
     angular_urad: (1.0, 8.0),
 };
 
+/// A first-order drift `um · (1 − exp(−t/τ))` (µm, s) of entry `k` of `drifts`, and its truth
+/// (`hint`: the parameter's ISO name).
+fn first_order(
+    drifts: &mut Vec<(usize, TimeFn)>,
+    k: usize,
+    hint: String,
+    (um, tau_s): (f64, f64),
+    what: &str,
+) -> TrueEffect {
+    drifts.push((
+        k,
+        TimeFn::FirstOrder {
+            a: um * 1e-3,
+            tau_s,
+        },
+    ));
+    TrueEffect {
+        iso_name_hint: hint,
+        kind: EffectKind::Drift,
+        size: um,
+        unit: "um",
+        value: um * 1e-3,
+        signed: true,
+        period: None,
+        detail: format!("{what}, τ = {tau_s:.0} s"),
+        record_change: None,
+    }
+}
+
 pub(crate) fn write(spec: &Spec, rng: &mut ChaCha8Rng, dir: &Path) -> std::io::Result<Truth> {
     let s = spec.ordinary_scale;
     let mut m = BcMachine::perfect(
@@ -386,46 +415,24 @@ pub(crate) fn write(spec: &Spec, rng: &mut ChaCha8Rng, dir: &Path) -> std::io::R
     for h in &spec.hidden {
         match *h {
             Hidden::PivotDrift { rotary, um, tau_s } if rotary < 2 => {
-                m.drift.push((
-                    rotary,
-                    TimeFn::FirstOrder {
-                        a: um * 1e-3,
-                        tau_s,
-                    },
-                ));
                 min_cycles = min_cycles.max(4);
-                effects.push(TrueEffect {
-                    iso_name_hint: ["EX0B", "EX0C"][rotary].into(),
-                    kind: EffectKind::Drift,
-                    size: um,
-                    unit: "um",
-                    value: um * 1e-3,
-                    signed: true,
-                    period: None,
-                    detail: format!("first order, τ = {tau_s:.0} s"),
-                    record_change: None,
-                });
+                effects.push(first_order(
+                    &mut m.drift,
+                    rotary,
+                    ["EX0B", "EX0C"][rotary].into(),
+                    (um, tau_s),
+                    "first order",
+                ));
             }
             Hidden::SpindleDrift { axis, um, tau_s } if axis < 3 => {
-                m.spindle.push((
-                    axis,
-                    TimeFn::FirstOrder {
-                        a: um * 1e-3,
-                        tau_s,
-                    },
-                ));
                 min_cycles = min_cycles.max(4);
-                effects.push(TrueEffect {
-                    iso_name_hint: format!("E{}0[tool]", ["X", "Y", "Z"][axis]),
-                    kind: EffectKind::Drift,
-                    size: um,
-                    unit: "um",
-                    value: um * 1e-3,
-                    signed: true,
-                    period: None,
-                    detail: format!("spindle growth, first order, τ = {tau_s:.0} s"),
-                    record_change: None,
-                });
+                effects.push(first_order(
+                    &mut m.spindle,
+                    axis,
+                    format!("E{}0[tool]", ["X", "Y", "Z"][axis]),
+                    (um, tau_s),
+                    "spindle growth, first order",
+                ));
             }
             Hidden::RiseFall { um, peak } => {
                 // Its time constant once the programme's length is known (below).
