@@ -444,8 +444,7 @@ pub fn physical_effects(
                     )
                     .exposed_by(axis.clone());
                     // The scale changing in time: the screw or scale expands as the machine
-                    // warms, about the axis' zero (a fixed bearing elsewhere adds a drift of
-                    // the axis' zero, its own candidate).
+                    // warms, about the axis' zero (or about a fixed bearing elsewhere, below).
                     if let Some(settling) = &settling {
                         let reference = slot.reference.as_ref().map(|r| Reference {
                             column: r
@@ -1539,8 +1538,7 @@ fn expansion_about_a_point(
         };
         let columns = DMat::from_fn(rows.len(), 2, |i, j| {
             let r = rows[i];
-            let settled = 1.0 - (-(t[r] - t0) / tau).exp();
-            column[r] * settled * if j == 0 { values[r] } else { 1.0 }
+            column[r] * settled(t[r] - t0, tau) * if j == 0 { values[r] } else { 1.0 }
         });
         Term {
             name: format!("{name} scale drift exp about a point"),
@@ -1585,8 +1583,14 @@ impl Settling {
     /// The first-order settling `1 − exp(−(t − t₀)/τ)` at the times `t` for the time
     /// constant `tau` (one column).
     fn at(t0: f64, t: &[f64], tau: f64) -> DMat {
-        DMat::from_fn(t.len(), 1, |i, _| 1.0 - (-(t[i] - t0) / tau).exp())
+        DMat::from_fn(t.len(), 1, |i, _| settled(t[i] - t0, tau))
     }
+}
+
+/// How far a first-order drift of time constant `tau` has settled `elapsed` s after it began:
+/// `1 − e^(−elapsed/τ)`.
+fn settled(elapsed: f64, tau: f64) -> f64 {
+    1.0 - (-elapsed / tau).exp()
 }
 
 fn coefficient_name(name: &str, suffix: &str, k: usize, width: usize) -> String {

@@ -368,7 +368,8 @@ pub struct CandidateScore {
 }
 
 /// A cause the search had chosen, replaced once the model was complete by one that, with the
-/// other causes fitted, explains the data better ([`Diagnosis::exchanged`]).
+/// other causes fitted, explains the data better, or by a simpler one the data do not tell from
+/// it ([`Diagnosis::exchanged`]).
 #[derive(Debug, Clone, Serialize)]
 pub struct Exchange {
     /// The cause chosen when it entered.
@@ -376,7 +377,8 @@ pub struct Exchange {
     /// The cause that took its place.
     pub by: String,
     /// How much lower the complete model's χ² is with the replacement (in units of the model's
-    /// residual variance).
+    /// residual variance); negative for a simpler cause, whose χ² is higher by less than the
+    /// exchange threshold.
     pub chi2_drop: f64,
 }
 

@@ -148,7 +148,7 @@ pub enum Hidden {
         tau_s: f64,
     },
     /// First-order thermal growth of the spindle, `um · (1 − exp(−t/τ))`: the tool point moves
-    /// along x, y or z of the spindle's frame (EX0[tool], EY0[tool], EZ0[tool]) (rtest).
+    /// along x, y or z of the spindle's frame (`EX0[tool]`, `EY0[tool]`, `EZ0[tool]`) (rtest).
     SpindleDrift {
         /// Direction 0 = x, 1 = y, 2 = z.
         axis: usize,
