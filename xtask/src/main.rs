@@ -78,11 +78,7 @@ fn run_realistic(args: &[String]) -> Result<(), String> {
     let dir = std::path::Path::new(dir);
     std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
     let effects = hidden;
-    let hidden = {
-        use rand::SeedableRng;
-        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed ^ 0x5eed_5eed_5eed_5eed);
-        xtask::studies::combined_hidden(&effects, &mut rng)
-    };
+    let hidden = xtask::studies::hidden_of_seed(&effects, seed);
     let mut spec = xtask::realistic::Spec::new(kind, &hidden);
     if let [(effect, _)] = effects[..] {
         spec.base_model = xtask::studies::user_model_lacking(kind, effect);

@@ -1078,6 +1078,15 @@ pub fn combined_plan() -> Vec<(Kind, Vec<(Effect, f64)>)> {
     ]
 }
 
+/// The hidden effects `cargo xtask realistic <kind> <seed> <dir> --hidden …` writes into the
+/// dataset of `seed` ([`combined_hidden`], drawn from the seed).
+pub fn hidden_of_seed(effects: &[(Effect, f64)], seed: u64) -> Vec<Hidden> {
+    combined_hidden(
+        effects,
+        &mut ChaCha8Rng::seed_from_u64(seed ^ 0x5eed_5eed_5eed_5eed),
+    )
+}
+
 /// The hidden effects of a combined cell, their other parameters drawn from `rng`: the k-th
 /// effect of one family on the k-th axis (pitch: X, Y, Z; pivot drift: B, C).
 pub fn combined_hidden(effects: &[(Effect, f64)], rng: &mut impl Rng) -> Vec<Hidden> {

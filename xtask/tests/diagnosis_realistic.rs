@@ -186,10 +186,9 @@ fn an_expansion_about_a_point_the_data_do_not_need_gives_way_to_a_simpler_drift(
     // (the exchange's parsimony), and what the data do not need leaves: no expansion is named.
     // (Seed 6 of `cargo xtask realistic axis 6 <dir> --hidden risefall 3`, a case where the
     // search took it.)
-    use rand::SeedableRng;
     let seed = 6;
-    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed ^ 0x5eed_5eed_5eed_5eed);
-    let spec = xtask::realistic::Spec::new(Kind::Axis, &[Effect::RiseFall.hidden(3.0, &mut rng)]);
+    let hidden = studies::hidden_of_seed(&[(Effect::RiseFall, 3.0)], seed);
+    let spec = xtask::realistic::Spec::new(Kind::Axis, &hidden);
     let d = diagnosed(&spec, seed);
     assert!(
         d.exchanged

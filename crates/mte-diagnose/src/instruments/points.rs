@@ -160,16 +160,27 @@ impl Points {
                 });
             }
         }
-        let frames: Vec<(Mat3, Vec3)> = q
+        // Per row, the nominal tool frame in the workpiece frame and the rotation of the
+        // instrument side's frame in the bed's (residuals and effects are turned by it), from one
+        // forward kinematics.
+        let (frames, to_bed): (Vec<(Mat3, Vec3)>, Vec<Mat3>) = q
             .iter()
             .map(|qr| {
-                let g = machine.tool_in_workpiece(qr, &[]);
+                let poses = machine.branch_poses(qr, &[]);
+                let g = poses.tool_in_workpiece();
+                let instrument_side = match side {
+                    Side::Tool => poses.workpiece_in_base,
+                    Side::Workpiece => poses.tool_in_base,
+                };
                 (
-                    *g.rotation.to_rotation_matrix().matrix(),
-                    g.translation.vector,
+                    (
+                        *g.rotation.to_rotation_matrix().matrix(),
+                        g.translation.vector,
+                    ),
+                    *instrument_side.rotation.to_rotation_matrix().matrix(),
                 )
             })
-            .collect();
+            .unzip();
         let fit = fit_nominal(
             &frames,
             &on_holder,
@@ -181,17 +192,6 @@ impl Points {
         )
         .map_err(|detail| file.error(detail))?;
         let n = 3 * rows;
-        let to_bed: Vec<Mat3> = q
-            .iter()
-            .map(|qr| {
-                let poses = machine.branch_poses(qr, &[]);
-                let side = match side {
-                    Side::Tool => poses.workpiece_in_base,
-                    Side::Workpiece => poses.tool_in_base,
-                };
-                *side.rotation.to_rotation_matrix().matrix()
-            })
-            .collect();
         let residual: Vec<Vec3> = (0..rows)
             .map(|r| {
                 let (rot, t) = &fit.poses[setup_of[r]];
