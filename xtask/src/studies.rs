@@ -60,9 +60,10 @@ pub struct Outcome {
     pub qualified: Vec<String>,
     /// Readings the diagnosis lists as outliers ([`mte_diagnose::Diagnosis::outliers`]).
     pub outliers: usize,
-    /// The sizes the diagnosis states for such groups where it states one: the findings and
-    /// `(value, standard uncertainty)` (a drift's change over the measured time).
-    pub compound_sizes: Vec<(Vec<String>, f64, f64)>,
+    /// The sizes the diagnosis states for such groups where it states one: the findings, the
+    /// estimate's name, its value and standard uncertainty (a drift's change over the measured
+    /// time of one parameter).
+    pub compound_sizes: Vec<(Vec<String>, String, f64, f64)>,
     /// Candidates the report lists as not separable with these data (a combination of the
     /// model's terms).
     pub not_separable: Vec<String>,
@@ -174,7 +175,7 @@ pub fn run_one(spec: &Spec, index: usize, seed: u64, work: &Path) -> Record {
                 .iter()
                 .filter_map(|c| {
                     let e = c.estimate.as_ref()?;
-                    Some((c.findings.clone(), e.value, e.uncertainty))
+                    Some((c.findings.clone(), e.name.clone(), e.value, e.uncertainty))
                 })
                 .collect(),
             not_separable: d
@@ -674,8 +675,9 @@ pub fn estimate_matches(effect: &TrueEffect, finding: &FoundEffect, k: f64) -> b
 
 /// For a drift with a known change over the record ([`TrueEffect::record_change`]): whether the
 /// diagnosis' change over the measured time lies within `k` standard uncertainties of it — the
-/// change of the group of findings the diagnosis says are one drift when `finding` is in one,
-/// else the finding's own. `None` for other effects.
+/// finding's first (an expansion about a point states its scale's, then its zero's), or that
+/// parameter's change by the group of findings the diagnosis says are one drift of it when
+/// `finding` is in one. `None` for other effects.
 pub fn change_matches(
     effect: &TrueEffect,
     finding: &FoundEffect,
@@ -683,18 +685,18 @@ pub fn change_matches(
     k: f64,
 ) -> Option<bool> {
     let truth = effect.record_change?;
-    let stated = outcome
-        .compound_sizes
+    let own = finding
+        .estimates
         .iter()
-        .find(|(members, _, _)| members.contains(&finding.name))
-        .map(|(_, v, u)| (*v, *u))
-        .or_else(|| {
-            finding
-                .estimates
-                .iter()
-                .find(|e| e.0.ends_with("change over the measured time"))
-                .map(|e| (e.1, e.2))
-        });
+        .find(|e| e.0.ends_with("change over the measured time"));
+    let stated = own.and_then(|own| {
+        outcome
+            .compound_sizes
+            .iter()
+            .find(|(members, name, _, _)| members.contains(&finding.name) && *name == own.0)
+            .map(|(_, _, v, u)| (*v, *u))
+            .or(Some((own.1, own.2)))
+    });
     Some(stated.is_some_and(|(v, u)| (v - truth).abs() <= k * u))
 }
 

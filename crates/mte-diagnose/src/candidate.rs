@@ -461,10 +461,11 @@ pub fn physical_effects(
                         // The screw fixed at a bearing away from the axis' zero: its scale and
                         // the axis' zero settle together, with one time constant.
                         if slot.reference.is_none() {
+                            let zero = zero_of(slot, drifting);
                             out.push(Box::new(Requires {
                                 term: scale.name.clone(),
                                 inner: Box::new(expansion_about_a_point(
-                                    slot, axis, &values, settling,
+                                    slot, &zero, axis, &values, settling,
                                 )),
                             }));
                         }
@@ -1512,17 +1513,46 @@ fn drift_candidates(
     vec![Box::new(linear), Box::new(exponential)]
 }
 
+/// The name of the parameter that holds the positioning slot's constant — the axis' zero as the
+/// readings see it: the drifting term (the instrument's zero, `EXX offset`) whose effect is the
+/// slot's, else `{slot} zero`. A drift of the zero found in two candidates (an offset drift and
+/// an expansion about a point) is then one parameter's drift by name ([`drifted_parameters`]).
+fn zero_of(slot: &SlotEffect, drifting: &[(&Term, Option<&Reference>)]) -> String {
+    let scale = slot.column.norm().max(1e-300);
+    drifting
+        .iter()
+        .find(|(t, _)| {
+            t.width() == 1 && (t.columns.column(0) - &slot.column).norm() <= 1e-9 * scale
+        })
+        .map_or_else(|| format!("{} zero", slot.name), |(t, _)| t.name.clone())
+}
+
+/// The parameters whose drift in time a drift term describes, by its coefficients' names: a
+/// linear drift's `… rate`, a first-order one's `… change` (an expansion about a point drifts
+/// two, the scale and the axis' zero).
+pub(crate) fn drifted_parameters(term: &Term) -> Vec<&str> {
+    term.coefficients
+        .iter()
+        .filter_map(|(name, _)| {
+            name.strip_suffix(" change")
+                .or_else(|| name.strip_suffix(" rate"))
+        })
+        .collect()
+}
+
 /// The first-order thermal expansion of a linear axis about a fixed point its data do not
 /// state (a screw's fixed bearing away from the axis' zero): the positioning error
 /// `(s·x + z)·(1 − e^(−(t − t₀)/τ))` with the axis coordinate x, the final scale change s and
 /// zero change z (the fixed point at x = −z/s), scanned over τ as the first-order drifts are.
+/// `zero` names the parameter that holds the axis' zero ([`zero_of`]).
 fn expansion_about_a_point(
     slot: &SlotEffect,
+    zero: &str,
     axis: &str,
     values: &[f64],
     settling: &Settling,
 ) -> Scan {
-    let (name, quantity) = (slot.name.clone(), slot.quantity);
+    let (name, quantity, zero) = (slot.name.clone(), slot.quantity, zero.to_string());
     let axis = axis.to_string();
     let column = slot.column.clone();
     let values = values.to_vec();
@@ -1544,7 +1574,7 @@ fn expansion_about_a_point(
             name: format!("{name} scale drift exp about a point"),
             label: format!("thermal expansion of {axis} about a fixed point (first-order)"),
             meaning: format!(
-                "the screw or scale of {axis} expands as the machine warms about its fixed bearing, away from the axis' zero: its scale and the zero of {axis} settle together with one time constant (the fixed point lies at {axis} = −zero change ÷ scale change)"
+                "the screw or scale of {axis} expands as the machine warms about its fixed bearing, away from the axis' zero: its scale and the zero of {axis} settle together with one time constant (the fixed point lies at {axis} = −{zero} change ÷ {name} scale change)"
             ),
             family: Family::Drift {
                 time_constant_s: Some(tau),
@@ -1552,7 +1582,7 @@ fn expansion_about_a_point(
             columns,
             coefficients: vec![
                 (format!("{name} scale change"), Quantity::Ratio),
-                (format!("{name} zero change"), quantity),
+                (format!("{zero} change"), quantity),
             ],
             summary: Summary::FixedPoint(format!("{name} fixed point")),
             exposed_by: Some("t".into()),

@@ -916,11 +916,12 @@ fn conclude(
             Some(first)
         })
         .collect();
-    let change = |members: &[usize]| {
+    let change = |members: &[usize], stem: &str| {
         drift_change(
             obs,
             &chosen,
             members,
+            stem,
             &offsets,
             &sol.coef,
             &cov,
@@ -928,7 +929,11 @@ fn conclude(
         )
     };
     for (k, f) in findings.iter_mut().enumerate() {
-        f.estimates.extend(change(&[k]));
+        if matches!(chosen[k].term.family, Family::Drift { .. }) {
+            for stem in crate::candidate::drifted_parameters(&chosen[k].term) {
+                f.estimates.extend(change(&[k], stem));
+            }
+        }
     }
     // The fit of the final model without each finding: its rivals are measured against it.
     let rests: Vec<Projector> = (0..chosen.len())
@@ -1141,7 +1146,7 @@ fn conclude(
     compound.extend(periodic_shapes(
         &searcher, &chosen, &fit, &covered, &ambiguous,
     ));
-    let drifts = compound_drifts(&findings, change);
+    let drifts = compound_drifts(&findings, &chosen, change);
     let covered: Vec<String> = drifts.iter().flat_map(|c| c.findings.clone()).collect();
     compound.extend(drifts);
     compound.extend(drift_shapes(
@@ -3565,36 +3570,41 @@ fn aliased_harmonic_families(
     out
 }
 
-/// Drifts of one parameter found in two forms (linear and first-order): together they describe
-/// a course neither has — a drift that rises and falls, or speeds up — over the measured time
-/// only, which the report says in one sentence.
+/// Drifts of one parameter found in two forms (linear and first-order, or a first-order drift
+/// of the axis' zero beside an expansion about a point, which drifts the zero too): together
+/// they describe a course neither has — a drift that rises and falls, or speeds up — over the
+/// measured time only, which the report says in one sentence. `chosen[k]` is `findings[k]`'s
+/// term; `change` gives the members' change of a parameter over the measured time.
 fn compound_drifts(
     findings: &[Finding],
-    change: impl Fn(&[usize]) -> Option<Estimate>,
+    chosen: &[Chosen],
+    change: impl Fn(&[usize], &str) -> Option<Estimate>,
 ) -> Vec<Compound> {
-    let mut out: Vec<Compound> = Vec::new();
-    for f in findings {
-        if !matches!(f.family, Family::Drift { .. }) {
-            continue;
+    let drifted: Vec<Vec<&str>> = chosen
+        .iter()
+        .map(|c| match c.term.family {
+            Family::Drift { .. } => crate::candidate::drifted_parameters(&c.term),
+            _ => Vec::new(),
+        })
+        .collect();
+    let mut stems: Vec<&str> = Vec::new();
+    for &stem in drifted.iter().flatten() {
+        if !stems.contains(&stem) {
+            stems.push(stem);
         }
-        let stem = f.name.split(" drift").next().unwrap_or_default();
-        if out
-            .iter()
-            .any(|c| c.findings[0].split(" drift").next() == Some(stem))
-        {
-            continue;
-        }
-        let members: Vec<usize> = (0..findings.len())
-            .filter(|&k| {
-                let g = &findings[k];
-                matches!(g.family, Family::Drift { .. })
-                    && g.name.split(" drift").next() == Some(stem)
-            })
-            .collect();
-        if members.len() > 1 {
+    }
+    stems
+        .into_iter()
+        .filter_map(|stem| {
+            let members: Vec<usize> = (0..chosen.len())
+                .filter(|&k| drifted[k].contains(&stem))
+                .collect();
+            if members.len() < 2 {
+                return None;
+            }
             let names: Vec<String> = members.iter().map(|&k| findings[k].name.clone()).collect();
-            let estimate = change(&members);
-            out.push(Compound {
+            let estimate = change(&members, stem);
+            Some(Compound {
                 note: format!(
                     "{} are one drift of {stem} whose course is neither linear nor a first-order settling (it may rise and fall): together they describe it over the measured time, not beyond it{}",
                     names.join(" and "),
@@ -3605,10 +3615,9 @@ fn compound_drifts(
                 ),
                 findings: names,
                 estimate,
-            });
-        }
-    }
-    out
+            })
+        })
+        .collect()
 }
 
 /// The readings the final fit (`sol`, `fit`, weights `w`) misses by far more than the rest:
@@ -3799,16 +3808,19 @@ fn drifts_at_the_shortest(searcher: &Searcher<'_>, chosen: &[Chosen]) -> Vec<Str
         .collect()
 }
 
-/// The change over the measured time (first reading to last) of the parameter whose drift the
-/// findings `members` (indices into `chosen`, drifts of one parameter) describe together, with
-/// its standard uncertainty by the delta method over the final model's covariance `cov` of the
-/// coefficients (each chosen term's first column at `offsets`) and of the time constants
-/// (`hyper_rows`): a linear drift's rate × T, a first-order one's `A (1 − e^(−T/τ))`. `None`
-/// where no member is a drift or the data have no time.
+/// The change over the measured time (first reading to last) of the parameter `stem` whose
+/// drift the findings `members` (indices into `chosen`) describe together, with its standard
+/// uncertainty by the delta method over the final model's covariance `cov` of the coefficients
+/// (each chosen term's columns from `offsets`; of each member the coefficient that drifts
+/// `stem`, [`crate::candidate::drifted_parameters`]) and of the time constants (`hyper_rows`):
+/// a linear drift's rate × T, a first-order one's `A (1 − e^(−T/τ))`. `None` where no member
+/// drifts `stem` or the data have no time.
+#[allow(clippy::too_many_arguments)]
 fn drift_change(
     obs: &Observations,
     chosen: &[Chosen],
     members: &[usize],
+    stem: &str,
     offsets: &[usize],
     coef: &DVec,
     cov: &DMat,
@@ -3818,15 +3830,21 @@ fn drift_change(
     let span = t.iter().copied().fold(f64::NEG_INFINITY, f64::max)
         - t.iter().copied().fold(f64::INFINITY, f64::min);
     let mut g = DVec::zeros(cov.nrows());
-    let (mut value, mut quantity, mut stem) = (0.0, None, "");
+    let (mut value, mut quantity) = (0.0, None);
     for &k in members {
         let term = &chosen[k].term;
         let Family::Drift { time_constant_s } = term.family else {
             continue;
         };
-        let (at, a) = (offsets[k], coef[offsets[k]]);
-        stem = term.name.split(" drift").next().unwrap_or_default();
-        quantity = Some(match term.coefficients[0].1 {
+        let Some(j) = crate::candidate::drifted_parameters(term)
+            .iter()
+            .position(|&p| p == stem)
+        else {
+            continue;
+        };
+        let at = offsets[k] + j;
+        let a = coef[at];
+        quantity = Some(match term.coefficients[j].1 {
             Quantity::LengthRate => Quantity::Length,
             Quantity::AngleRate => Quantity::Angle,
             Quantity::RatioRate => Quantity::Ratio,
@@ -3860,7 +3878,7 @@ fn drift_change(
 
 /// Drifts found in one form (linear or first-order) whose course the data say is another: a
 /// smooth curve of the same parameter in time (its column times Legendre polynomials of degree
-/// 1–4 in t) still explains significantly more once the final model holds them (F test,
+/// 1–4 in t; of both parameters an expansion about a point drifts) still explains significantly more once the final model holds them (F test,
 /// Bonferroni over the drifts tested, at [`COMPLETION_LEVEL`] as for a periodic finding's shape
 /// in [`periodic_shapes`]; `fit`: the final model's). Said in one sentence: the finding
 /// describes a drift of that parameter, not its course.
@@ -3887,16 +3905,29 @@ fn drift_shapes(
     drifts
         .iter()
         .filter_map(|d| {
-            let stem = d.name.split(" drift").next()?;
-            // The drifting term: in the model, or a combination of model terms (an absolute
-            // location error when the relative ones are in the base).
-            let constant = match terms.iter().find(|t| t.name == stem) {
-                Some(t) => t.columns.column(0).into_owned(),
-                None => library_constant(candidates, obs, stem)?,
-            };
-            let mut cols = curve.clone();
-            for mut c in cols.column_iter_mut() {
-                c.component_mul_assign(&constant);
+            // The drifting terms (an expansion about a point drifts the scale and the zero): in
+            // the model, or a combination of model terms (an absolute location error when the
+            // relative ones are in the base).
+            let (stems, constants): (Vec<&str>, Vec<DVec>) =
+                crate::candidate::drifted_parameters(d)
+                    .into_iter()
+                    .filter_map(|stem| {
+                        let constant = match terms.iter().find(|t| t.name == stem) {
+                            Some(t) => t.columns.column(0).into_owned(),
+                            None => library_constant(candidates, obs, stem)?,
+                        };
+                        Some((stem, constant))
+                    })
+                    .unzip();
+            if stems.is_empty() {
+                return None;
+            }
+            let stem = stems.join(" and ");
+            let mut cols = DMat::zeros(obs.len(), curve.ncols() * constants.len());
+            for (j, constant) in constants.iter().enumerate() {
+                for (k, c) in curve.column_iter().enumerate() {
+                    cols.set_column(j * curve.ncols() + k, &c.component_mul(constant));
+                }
             }
             let inc = fit.increment(&cols);
             let p = (f_test(fit.rss_w(), inc.delta_rss, inc.new_rank, fit.dof())

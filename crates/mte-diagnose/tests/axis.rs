@@ -309,7 +309,7 @@ fn a_screw_fixed_away_from_the_axis_zero_expands_about_its_bearing() {
     let f = &d.findings[0];
     for (name, factor, truth) in [
         ("EXX scale change", 1e6, 12.0),
-        ("EXX zero change", 1e3, -12e-3 * 600.0),
+        ("EXX offset change", 1e3, -12e-3 * 600.0),
         ("EXX fixed point", 1.0, 600.0),
     ] {
         let e = f
