@@ -27,8 +27,9 @@ use crate::realistic::{
 pub struct FoundEffect {
     /// Finding name.
     pub name: String,
-    /// Estimates `(name, value, standard uncertainty)`.
-    pub estimates: Vec<(String, f64, f64)>,
+    /// Estimates `(name, value, standard uncertainty, 95 % interval where the report states
+    /// one)`.
+    pub estimates: Vec<(String, f64, f64, Option<mte_diagnose::Interval>)>,
     /// The alternatives the diagnosis reports it cannot separate from this finding.
     pub alternatives: Vec<String>,
     /// Its period (mm along a linear axis, rad of a turn), for a periodic finding.
@@ -153,7 +154,7 @@ pub fn run_one(spec: &Spec, index: usize, seed: u64, work: &Path) -> Record {
                     estimates: f
                         .estimates
                         .iter()
-                        .map(|e| (e.name.clone(), e.value, e.uncertainty))
+                        .map(|e| (e.name.clone(), e.value, e.uncertainty, e.interval))
                         .collect(),
                 })
                 .collect(),
@@ -657,20 +658,36 @@ pub fn names_effect(effect: &TrueEffect, finding: &str) -> bool {
 
 /// Whether the finding's estimate matches the truth within `k` standard uncertainties: the
 /// estimate named `amplitude` if there is one, else the first; magnitudes are compared where the
-/// truth's sign is not defined the diagnosis's way ([`TrueEffect::signed`]).
+/// truth's sign is not defined the diagnosis's way ([`TrueEffect::signed`]). Where the report
+/// states a 95 % interval (a first-order drift's final value, beyond the record), with `k` = 2
+/// the truth must lie in it. A drift's rate (found linear) is not compared with a final value,
+/// nor a final value (found first-order) with a rate: no match.
 pub fn estimate_matches(effect: &TrueEffect, finding: &FoundEffect, k: f64) -> bool {
     let e = finding
         .estimates
         .iter()
         .find(|e| e.0.contains("amplitude"))
         .or(finding.estimates.first());
-    let Some((_, v, u)) = e else { return false };
-    let (v, t) = if effect.signed {
-        (*v, effect.value)
-    } else {
-        (v.abs(), effect.value.abs())
+    let Some((name, v, u, interval)) = e else {
+        return false;
     };
-    (v - t).abs() <= k * u
+    // A rate (a linear drift's) and a final value (a first-order one's) are not compared.
+    if name.ends_with(" rate") != effect.unit.ends_with("/min") {
+        return false;
+    }
+    match interval {
+        Some(i) if k == 2.0 => {
+            i.contains(effect.value) || (!effect.signed && i.contains(-effect.value))
+        }
+        _ => {
+            let (v, t) = if effect.signed {
+                (*v, effect.value)
+            } else {
+                (v.abs(), effect.value.abs())
+            };
+            (v - t).abs() <= k * u
+        }
+    }
 }
 
 /// For a drift with a known change over the record ([`TrueEffect::record_change`]): whether the
@@ -1472,8 +1489,10 @@ of those named right, |estimate − truth| ≤ 2 u (the `amplitude` estimate or 
 magnitudes for periodic amplitudes and squareness, whose sign convention is the engine's; \
 for B tilt and squareness the truth is the machine's total, ordinary + hidden, for C's angular \
 positioning the amplitude of the machine's total at the hidden harmonic, where its ordinary \
-error motion about Z has a component too; a first-order drift found as a linear one, whose \
-estimate is a rate, counts as outside); *drift: change over the measured time within 2 u*: \
+error motion about Z has a component too; for a first-order drift's final value, beyond the \
+record, the report states a 95 % interval by profile likelihood over the time constant, and the \
+truth must lie in it; a first-order drift found as a linear one, whose estimate is a rate, and \
+a linear one found as first-order count as outside); *drift: change over the measured time within 2 u*: \
 for a drift, of those named right, |stated − true| ≤ 2 u for the drift's change from the first \
 reading to the last — the finding's *change over the measured time*, or, where the report says \
 that drift findings of the parameter are one drift of neither form, their change together: the \
@@ -1512,9 +1531,12 @@ u; with n datasets the binomial standard error is about √(0.05·0.95/n)). The 
 (a hidden 20 µrad on top of the ordinary XY squareness, against the full model without it) \
 compare with the machine's total between the reference lines through the measured positions. \
 R-test pivot drift \
-(τ drawn from 600 to 3 600 s): a first-order drift's own size is its asymptote, beyond the data, \
-and a drift slow against the record is found as a linear one, whose estimate is a rate (outside \
-under *within 2 u*). The change over the measured time, which the report states for every \
+(τ drawn from 600 to 3 600 s) and thermal expansion (300–1 800 s): a first-order drift's own \
+size is its final value, beyond the data, which the report states with its 95 % interval by \
+profile likelihood over the time constant (a slow drift's is longer above than ± 2 u: a longer \
+time constant with a larger final value fits almost as well), and *within 2 u* asks that the \
+truth lie in it; a drift slow against the record is found as a linear one, whose estimate is a \
+rate (outside under *within 2 u*). The change over the measured time, which the report states for every \
 drift, is the size the data determine whatever the form found: read that column. The drifts \
 searched settle no faster than a third of the interval between repeated visits of a pose (one \
 programme cycle, about 900–1 600 s here): the differences between a pose's consecutive visits, \

@@ -18,7 +18,7 @@ use crate::fit::{
     weighted_products_by_rows, whitened_r, whitening,
 };
 use crate::structure::{StructureTest, structure_tests};
-use crate::term::{Estimate, Family, Quantity, Summary, Term};
+use crate::term::{Estimate, Family, Interval, Quantity, Summary, Term};
 use crate::{DiagnoseError, Result};
 
 /// Settings of the diagnosis (builder).
@@ -888,11 +888,8 @@ fn conclude(
                         None => return None,
                     };
                     Some(Estimate {
-                        name: name.into(),
-                        value: v,
-                        uncertainty,
-                        quantity: q,
                         text,
+                        ..Estimate::new(name, v, uncertainty, q)
                     })
                 },
             ),
@@ -939,6 +936,33 @@ fn conclude(
     let rests: Vec<Projector> = (0..chosen.len())
         .map(|k| searcher.fit_without(&chosen, k, &base_fit))
         .collect();
+    // A first-order drift's final value lies beyond the record, through a time constant the
+    // data may bound on one side only: its 95 % interval by profile likelihood.
+    if let Some(t) = obs.variable_of_kind(VariableKind::Time) {
+        let span = crate::basis::range(&t.values);
+        let span = span.1 - span.0;
+        let yw = obs.values.component_mul(w);
+        let scale = covariance_scale(obs, extended.sigma0);
+        for (k, c) in chosen.iter().enumerate() {
+            let Some((tau, coefficients)) =
+                settling_intervals(&searcher, c, &rests[k], &yw, fit.rss_w(), scale, span)
+            else {
+                continue;
+            };
+            let f = &mut findings[k];
+            for (e, profile) in f.estimates.iter_mut().zip(coefficients) {
+                // Never narrower than the linearisation's ± 2 u.
+                let interval = Interval {
+                    lower: profile.lower.map(|l| l.min(e.value - 2.0 * e.uncertainty)),
+                    upper: profile.upper.map(|u| u.max(e.value + 2.0 * e.uncertainty)),
+                };
+                *e = e.clone().with_interval(interval);
+            }
+            if let Some(h) = f.hyper_parameter.take() {
+                f.hyper_parameter = Some(h.with_interval(tau));
+            }
+        }
+    }
     // A drift the data cannot tell from two others together.
     for (k, c) in chosen.iter().enumerate() {
         findings[k].alternatives.extend(
@@ -3867,13 +3891,131 @@ fn drift_change(
     }
     let quantity = quantity?;
     let u = g.dot(&(cov * &g)).max(0.0).sqrt();
-    Some(Estimate {
-        name: format!("{stem} change over the measured time"),
+    Some(Estimate::new(
+        format!("{stem} change over the measured time"),
         value,
-        uncertainty: u,
+        u,
         quantity,
-        text: quantity.format(value, u),
-    })
+    ))
+}
+
+/// A first-order drift's time constant and coefficients (the values it settles to, beyond the
+/// record) by profile likelihood: the drift `c` at each time constant of a log grid from a
+/// thirtieth of the one found to a thousand records (`span`, s), fitted beside the rest of the
+/// final model (`rest`, the fit without it; `yw` the whitened observations): the weighted RSS
+/// and the coefficients at each. The 95 % intervals hold the values whose profile χ² lies within
+/// 4 · `scale` of the least (`rss_final` at the time constant found, or below it on the grid):
+/// for a coefficient, at each admitted time constant its conditional interval narrowed by the
+/// RSS that time constant costs. An end the grid's last (or first) point still admits is open:
+/// a drift that need not settle within the record has no final value on that side. `None` for
+/// other terms, or where the candidate cannot re-evaluate the drift.
+fn settling_intervals(
+    searcher: &Searcher<'_>,
+    c: &Chosen,
+    rest: &Projector,
+    yw: &DVec,
+    rss_final: f64,
+    scale: f64,
+    span: f64,
+) -> Option<(Interval, Vec<Interval>)> {
+    let Family::Drift {
+        time_constant_s: Some(tau),
+    } = c.term.family
+    else {
+        return None;
+    };
+    const COARSE: usize = 48;
+    const FINE: usize = 64;
+    let candidate = searcher.chosen_candidate(c);
+    // (time constant, RSS, coefficients, their conditional cofactors)
+    let at = |t: f64| -> Option<(f64, f64, DVec, DVec)> {
+        let term = nth_component(candidate.at(c.variant, t)?, c.component);
+        let cw = rest.residual_part(&term.columns);
+        let inverse = cw.tr_mul(&cw).try_inverse()?;
+        let b = cw.tr_mul(yw);
+        let coef = &inverse * &b;
+        Some((t, rest.rss_w() - b.dot(&coef), coef, inverse.diagonal()))
+    };
+    let log_grid = |lo: f64, hi: f64, m: usize| {
+        (0..m).map(move |i| lo * (hi / lo).powf(i as f64 / (m - 1) as f64))
+    };
+    // A coarse grid over the whole range, then a fine one over the admitted part and a step
+    // beyond each end.
+    let (lo, hi) = (tau / 30.0, (1000.0 * span).max(30.0 * tau));
+    let coarse: Vec<_> = log_grid(lo, hi, COARSE)
+        .map(at)
+        .collect::<Option<Vec<_>>>()?;
+    let least = coarse.iter().map(|p| p.1).fold(rss_final, f64::min);
+    let inside = |p: &(f64, f64, DVec, DVec)| p.1 - least < 4.0 * scale;
+    let first = coarse.iter().position(inside).unwrap_or(0);
+    let last = coarse.iter().rposition(inside).unwrap_or(COARSE - 1);
+    let (from, to) = (
+        coarse[first.saturating_sub(1)].0,
+        coarse[(last + 1).min(COARSE - 1)].0,
+    );
+    let mut profile: Vec<_> = log_grid(from, to, FINE)
+        .chain([tau])
+        .map(at)
+        .collect::<Option<Vec<_>>>()?;
+    profile.extend(coarse);
+    profile.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let least = profile.iter().map(|p| p.1).fold(least, f64::min);
+    let inside = |p: &(f64, f64, DVec, DVec)| p.1 - least < 4.0 * scale;
+    let admitted: Vec<_> = profile.iter().filter(|p| inside(p)).collect();
+    let (&first, &last) = (admitted.first()?, admitted.last()?);
+    let (lowest, highest) = (&profile[0], &profile[profile.len() - 1]);
+    let (open_low, open_high) = (inside(lowest), inside(highest));
+    // An end of the time constant's interval: where the profile crosses 4 between the admitted
+    // point and its neighbour outside (linear in RSS against log τ).
+    let crossing = |inner: &(f64, f64, DVec, DVec), outer: &(f64, f64, DVec, DVec)| {
+        let limit = least + 4.0 * scale;
+        let f = ((limit - inner.1) / (outer.1 - inner.1)).clamp(0.0, 1.0);
+        (inner.0.ln() + f * (outer.0.ln() - inner.0.ln())).exp()
+    };
+    let index = |p: &(f64, f64, DVec, DVec)| profile.iter().position(|q| q.0 == p.0);
+    let tau_interval = Interval {
+        lower: (!open_low).then(|| {
+            index(first).map_or(first.0, |i| crossing(first, &profile[i.saturating_sub(1)]))
+        }),
+        upper: (!open_high).then(|| {
+            index(last).map_or(last.0, |i| {
+                crossing(last, &profile[(i + 1).min(profile.len() - 1)])
+            })
+        }),
+    };
+    let coefficients = (0..c.term.width())
+        .map(|j| {
+            let (mut lower, mut upper) = (f64::INFINITY, f64::NEG_INFINITY);
+            for p in &admitted {
+                let half = ((4.0 * scale - (p.1 - least)) * p.3[j]).max(0.0).sqrt();
+                lower = lower.min(p.2[j] - half);
+                upper = upper.max(p.2[j] + half);
+            }
+            // Open where the admitted range reaches the grid's end: towards where the
+            // coefficient goes as the time constant does.
+            let towards =
+                |end: &(f64, f64, DVec, DVec), next: &(f64, f64, DVec, DVec)| end.2[j] > next.2[j];
+            let mut interval = Interval {
+                lower: Some(lower),
+                upper: Some(upper),
+            };
+            let n = profile.len();
+            for (open, end, next) in [
+                (open_high, &profile[n - 1], &profile[n - 2]),
+                (open_low, &profile[0], &profile[1]),
+            ] {
+                if open {
+                    if towards(end, next) {
+                        interval.upper = None;
+                    } else {
+                        interval.lower = None;
+                    }
+                }
+            }
+            interval
+        })
+        .collect();
+    Some((tau_interval, coefficients))
 }
 
 /// Drifts found in one form (linear or first-order) whose course the data say is another: a
@@ -4978,13 +5120,7 @@ mod tests {
     use super::*;
 
     fn estimate(name: &str, value: f64, uncertainty: f64, quantity: Quantity) -> Estimate {
-        Estimate {
-            name: name.into(),
-            value,
-            uncertainty,
-            quantity,
-            text: String::new(),
-        }
+        Estimate::new(name, value, uncertainty, quantity)
     }
 
     /// A periodic finding of X with `period` mm and `amplitude` µm (u 1 % of each).

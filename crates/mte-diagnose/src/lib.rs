@@ -24,7 +24,7 @@ pub use engine::{
 pub use instruments::{load, load_with_noise};
 pub use model::{DriftOf, Effects, ObservationModel, Prepared, prepare};
 pub use structure::StructureTest;
-pub use term::{Estimate, Family, Quantity, Summary, Term};
+pub use term::{Estimate, Family, Interval, Quantity, Summary, Term};
 
 /// What can go wrong in a diagnosis.
 #[derive(Debug, thiserror::Error)]

@@ -214,8 +214,57 @@ pub struct Estimate {
     pub uncertainty: f64,
     /// What kind of quantity it is.
     pub quantity: Quantity,
-    /// Value ± uncertainty in the units engineers read.
+    /// Value ± uncertainty in the units engineers read (with the interval, where there is one).
     pub text: String,
+    /// Where the estimate depends on a nonlinear parameter the data determine poorly (a
+    /// first-order drift's final value, beyond the record, through its time constant): the
+    /// 95 % profile-likelihood interval, which the ± u of the linearisation does not describe.
+    pub interval: Option<Interval>,
+}
+
+/// A 95 % interval (the values whose profile χ² lies within 4 of its least); an open end is a
+/// bound the data do not set.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Interval {
+    /// Lower end, `None` where the data set none.
+    pub lower: Option<f64>,
+    /// Upper end, `None` where the data set none.
+    pub upper: Option<f64>,
+}
+
+impl Interval {
+    /// Whether `v` lies inside.
+    pub fn contains(&self, v: f64) -> bool {
+        self.lower.is_none_or(|l| v >= l) && self.upper.is_none_or(|u| v <= u)
+    }
+}
+
+impl Estimate {
+    /// An estimate with value ± u in the units engineers read.
+    pub fn new(name: impl Into<String>, value: f64, uncertainty: f64, quantity: Quantity) -> Self {
+        Estimate {
+            name: name.into(),
+            value,
+            uncertainty,
+            quantity,
+            text: quantity.format(value, uncertainty),
+            interval: None,
+        }
+    }
+
+    /// The estimate with its 95 % interval, which the text states after value ± u.
+    pub fn with_interval(mut self, interval: Interval) -> Self {
+        let end =
+            |v: Option<f64>| v.map_or("no bound".to_string(), |v| self.quantity.format_value(v));
+        self.text = format!(
+            "{} (95 % interval {} to {})",
+            self.text,
+            end(interval.lower),
+            end(interval.upper)
+        );
+        self.interval = Some(interval);
+        self
+    }
 }
 
 impl Term {
@@ -243,12 +292,8 @@ impl Term {
 
     /// Reported estimates from the term's coefficients and their covariance block.
     pub fn estimates(&self, coef: &[f64], cov: &DMat) -> Vec<Estimate> {
-        let make = |name: &str, value: f64, u: f64, quantity: Quantity| Estimate {
-            name: name.to_string(),
-            value,
-            uncertainty: u,
-            quantity,
-            text: quantity.format(value, u),
+        let make = |name: &str, value: f64, u: f64, quantity: Quantity| {
+            Estimate::new(name, value, u, quantity)
         };
         match &self.summary {
             Summary::FixedPoint(name) if coef.len() == 2 => {

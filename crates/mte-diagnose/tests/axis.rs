@@ -249,6 +249,67 @@ fn a_screw_expanding_as_it_warms_is_the_scale_drifting_with_its_time_constant() 
         within(v, u, truth, 2.0),
         "change over the measured time {v:.2} ± {u:.2} ppm, truth {truth:.2}"
     );
+    // The final value and the time constant with their profile intervals, closed here (a time
+    // constant of a third of the record).
+    let interval = |e: &mte_diagnose::Estimate| e.interval.expect("a 95 % interval");
+    let final_value = interval(&f.estimates[0]);
+    assert!(
+        final_value.lower.is_some() && final_value.upper.is_some() && final_value.contains(12e-6),
+        "{}",
+        f.estimates[0].text
+    );
+    let tau = f.hyper_parameter.as_ref().expect("a time constant");
+    assert!(
+        interval(tau).lower.is_some() && interval(tau).contains(1200.0),
+        "{}",
+        tau.text
+    );
+}
+
+/// A screw still expanding at the end of the record (time constant twice the record): the data
+/// show its course better than where it settles. The final value's 95 % interval (profile
+/// likelihood over the time constant) holds the truth and reaches further above than the
+/// linearisation's ± 2 u (a longer time constant, a larger final value, fits almost as well),
+/// and the change over the measured time is sized.
+#[test]
+fn a_drift_still_rising_at_the_end_of_the_record_has_a_final_value_interval_longer_above() {
+    let tau_s = 2.0 * LAST_T_S;
+    let hidden = Hidden {
+        expansion_ppm: 40.0,
+        expansion_tau_s: tau_s,
+        ..Hidden::default()
+    };
+    let d = run(&write_dataset("expansion-slow", hidden, 24));
+    let report = mte_diagnose::report::markdown(&d, "expansion-slow");
+    let f = d
+        .findings
+        .iter()
+        .find(|f| f.name == "EXX scale drift exp")
+        .unwrap_or_else(|| panic!("{report}"));
+    let e = &f.estimates[0];
+    let i = e.interval.unwrap_or_else(|| panic!("{report}"));
+    let (lower, upper) = (
+        i.lower.unwrap_or(f64::NEG_INFINITY),
+        i.upper.unwrap_or(f64::INFINITY),
+    );
+    assert!(
+        i.contains(40e-6)
+            && upper - e.value > 1.5 * (e.value - lower)
+            && upper > e.value + 2.0 * e.uncertainty,
+        "{}",
+        e.text
+    );
+    let change = f
+        .estimates
+        .iter()
+        .find(|e| e.name.ends_with("change over the measured time"))
+        .unwrap_or_else(|| panic!("{report}"));
+    let truth = 40.0 * (1.0 - (-LAST_T_S / tau_s).exp());
+    assert!(
+        within(change.value * 1e6, change.uncertainty * 1e6, truth, 2.0),
+        "{}, truth {truth:.2} ppm",
+        change.text
+    );
 }
 
 /// An ISO 230-2 export without times: a zero drifting at 0.1 µm/min shows as the zero shifting
