@@ -367,6 +367,8 @@ pub enum Effect {
     Pitch,
     /// [`Hidden::Reversal`], µm.
     Reversal,
+    /// [`Hidden::Reversal`] of a rotary table, µrad.
+    RotaryReversal,
     /// [`Hidden::ReversalGrowing`], µm at the end of the travel.
     ReversalGrowing,
     /// [`Hidden::ZeroDrift`], µm/min.
@@ -398,9 +400,10 @@ pub enum Effect {
 
 impl Effect {
     /// Every effect, in declaration order.
-    pub const ALL: [Effect; 15] = [
+    pub const ALL: [Effect; 16] = [
         Effect::Pitch,
         Effect::Reversal,
+        Effect::RotaryReversal,
         Effect::ReversalGrowing,
         Effect::ZeroDrift,
         Effect::ScaleDrift,
@@ -428,6 +431,7 @@ impl Effect {
         match self {
             Effect::Pitch => "periodic pitch of X",
             Effect::Reversal => "reversal",
+            Effect::RotaryReversal => "reversal of C",
             Effect::ReversalGrowing => "reversal growing along X",
             Effect::ZeroDrift => "linear zero drift",
             Effect::ScaleDrift => "thermal expansion of X growing in time",
@@ -454,7 +458,7 @@ impl Effect {
                 amplitude_um: size,
                 period_mm: rng.random_range(5.0..=40.0),
             },
-            Effect::Reversal => Hidden::Reversal { um: sign * size },
+            Effect::Reversal | Effect::RotaryReversal => Hidden::Reversal { um: sign * size },
             Effect::ReversalGrowing => Hidden::ReversalGrowing { um: sign * size },
             Effect::ZeroDrift => Hidden::ZeroDrift {
                 um_per_min: sign * size,
@@ -512,9 +516,11 @@ impl Effect {
     pub fn unit(self) -> &'static str {
         match self {
             Effect::ZeroDrift => "µm/min",
-            Effect::Squareness | Effect::AngularPositioning | Effect::WormGear | Effect::BTilt => {
-                "µrad"
-            }
+            Effect::Squareness
+            | Effect::AngularPositioning
+            | Effect::WormGear
+            | Effect::BTilt
+            | Effect::RotaryReversal => "µrad",
             Effect::TrackerScale | Effect::ScaleDrift => "ppm",
             _ => "µm",
         }
@@ -578,6 +584,11 @@ pub fn power_plan() -> Vec<(Kind, Effect, Vec<f64>)> {
             vec![5.0, 10.0, 20.0, 30.0],
         ),
         (Kind::Rotary, Effect::WormGear, vec![1.0, 2.5, 5.0, 10.0]),
+        (
+            Kind::Rotary,
+            Effect::RotaryReversal,
+            vec![1.0, 2.5, 5.0, 10.0],
+        ),
     ]
 }
 
@@ -592,6 +603,7 @@ pub fn coverage_plan() -> Vec<(Kind, Effect, f64)> {
         (Kind::Rtest, Effect::PivotDrift, 10.0),
         // A harmonic of a turn, whose period is exact (no period uncertainty in its size's).
         (Kind::Rotary, Effect::WormGear, 5.0),
+        (Kind::Rotary, Effect::RotaryReversal, 5.0),
         // A squareness against the full model: the estimate against ISO 230-1's angle between
         // the reference lines through the measured positions.
         (Kind::TrackerTools, Effect::Squareness, 20.0),
@@ -1094,6 +1106,11 @@ pub fn combined_plan() -> Vec<(Kind, Vec<(Effect, f64)>)> {
             Kind::Rtest,
             vec![(Effect::PivotDrift, 10.0), (Effect::SpindleDrift, 10.0)],
         ),
+        // A worn worm drive: its tooth error and its backlash.
+        (
+            Kind::Rotary,
+            vec![(Effect::WormGear, 5.0), (Effect::RotaryReversal, 5.0)],
+        ),
     ]
 }
 
@@ -1516,7 +1533,7 @@ fixed point; its size the final scale change); a reversal \
 growing along X from none at the start of the travel to its size at the end is named by the \
 reversal (its truth the mean over the targets) with its change along X (`EXX reversal poly1`); the rotary table's user model has its smooth angular \
 positioning error (harmonics up to the second, completed by the diagnosis as the data ask), \
-not the worm gear's.\n\n\
+not the worm gear's, nor its reversal (the worm's backlash, named by `ECC reversal`).\n\n\
 "
         );
         power_table(&mut s, &r.power);

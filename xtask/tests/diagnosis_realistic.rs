@@ -548,7 +548,7 @@ fn wavier_ordinary_errors_on_a_tracker_are_completed_not_named() {
 }
 
 #[test]
-fn a_rotary_tables_worm_gear_is_named_and_sized_and_clean_tables_rarely_give_a_finding() {
+fn a_rotary_tables_worm_gear_and_backlash_are_named_and_clean_tables_rarely_give_a_finding() {
     // ISO 230-2 runs of a C rotary table (arcsec) whose smooth angular positioning error — a
     // random function over a turn — the user's model holds up to the second harmonic: on clean
     // tables the diagnosis completes it and names nothing; a worm gear's tooth error of 5 µrad
@@ -566,6 +566,11 @@ fn a_rotary_tables_worm_gear_is_named_and_sized_and_clean_tables_rarely_give_a_f
         c.estimate_within_2u,
         c.n
     );
+    // A worn worm drive: the tooth error and the backlash (5 µrad each) together, both named
+    // and nothing else.
+    let c = combined_cell(Kind::Rotary, Effect::RotaryReversal, 10);
+    named_or_inseparable_and_nothing_else(&c);
+    assert_eq!(c.all_named, c.n, "{:?}", c.names);
 }
 
 /// The bundled `fixtures/datasets/tracker-tools/` is what `cargo xtask realistic tracker-tools

@@ -309,6 +309,27 @@ fn reversal_separates_the_directions_by_its_size() {
 }
 
 #[test]
+fn a_rotary_tables_reversal_separates_the_directions_in_arcsec() {
+    // A perfect table with a 10 µrad backlash: the `+` readings 5 µrad (1.031″) above the
+    // commanded angle, the `-` ones as far below.
+    let dir = tmp("rotary-reversal");
+    let truth = write_spec(
+        &perfect(Kind::Rotary, &[Hidden::Reversal { um: 10.0 }]),
+        8,
+        &dir,
+    )
+    .unwrap();
+    assert_abs_diff_eq!(truth.effects[0].value, 10e-6, epsilon = 1e-12);
+    let half = 5e-6_f64.to_degrees() * 3600.0;
+    let rows = read_csv(&dir.join("runs.csv"));
+    assert!(!rows.is_empty());
+    for r in &rows {
+        let expected = if r["direction"] == "+" { half } else { -half };
+        assert_abs_diff_eq!(num(r, "deviation_arcsec"), expected, epsilon = 1e-4);
+    }
+}
+
+#[test]
 fn a_rotary_tables_worm_gear_is_its_harmonic_in_arcsec() {
     // A perfect table with a 5 µrad error at 36 cycles per turn: every deviation (″) is on that
     // sine of the commanded angle, of amplitude 5 µrad = 1.031″.

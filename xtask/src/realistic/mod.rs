@@ -121,9 +121,10 @@ pub enum Hidden {
         /// Extra angle, µrad.
         urad: f64,
     },
-    /// Reversal (backlash): the `-` runs sit `um` below the `+` runs (axis).
+    /// Reversal (backlash): the `-` runs sit `um` below the `+` runs (axis; of a rotary table,
+    /// µrad).
     Reversal {
-        /// Difference between the directions, µm.
+        /// Difference between the directions, µm (µrad for a rotary table).
         um: f64,
     },
     /// A reversal that grows along the axis, from none at its start to `um` at its end (a

@@ -8,7 +8,10 @@ use rand::Rng;
 use rand_chacha::ChaCha8Rng;
 
 use super::smooth::{Periodic, signed};
-use super::{Hidden, Kind, Spec, Truth, angular_positioning, unsupported, write_manifest};
+use super::{
+    EffectKind, Hidden, Kind, Spec, TrueEffect, Truth, angular_positioning, unsupported,
+    write_manifest,
+};
 
 /// Arcseconds per radian.
 const ARCSEC: f64 = 180.0 * 3600.0 / std::f64::consts::PI;
@@ -33,7 +36,8 @@ pub fn irregular_turn(rng: &mut impl Rng, n: usize) -> Vec<f64> {
 /// A rotary table with its ordinary angular positioning error — a zero offset and a random
 /// smooth function over a turn (harmonics of a turn, [`Periodic`]) of 2–15″ — measured at 24–48
 /// irregular angles in 3–5 bidirectional runs, noise 0.2–1.0″; on top, the hidden effects of
-/// `spec`: an angular positioning error at one harmonic of a turn (a worm gear's tooth error).
+/// `spec`: an angular positioning error at one harmonic of a turn (a worm gear's tooth error), a
+/// reversal (the worm's backlash: the `-` runs `um` µrad below the `+` runs).
 pub(crate) fn write(spec: &Spec, rng: &mut ChaCha8Rng, dir: &Path) -> std::io::Result<Truth> {
     let n_targets = rng.random_range(24..=48);
     let targets = irregular_turn(rng, n_targets);
@@ -49,6 +53,8 @@ pub(crate) fn write(spec: &Spec, rng: &mut ChaCha8Rng, dir: &Path) -> std::io::R
     let mut effects = Vec::new();
     // The hidden harmonics: (rad, cycles per turn, phase).
     let mut harmonics: Vec<(f64, f64, f64)> = Vec::new();
+    // The hidden reversal, rad.
+    let mut reversal = 0.0;
     for h in &spec.hidden {
         match *h {
             Hidden::AngularPositioning {
@@ -59,6 +65,20 @@ pub(crate) fn write(spec: &Spec, rng: &mut ChaCha8Rng, dir: &Path) -> std::io::R
                 let (drawn, truth) = angular_positioning(rng, &positioning, 1, harmonic, urad);
                 harmonics.push(drawn);
                 effects.push(truth);
+            }
+            Hidden::Reversal { um: urad } => {
+                reversal += urad * 1e-6;
+                effects.push(TrueEffect {
+                    iso_name_hint: "reversal".into(),
+                    kind: EffectKind::Reversal,
+                    size: urad,
+                    unit: "urad",
+                    value: urad * 1e-6,
+                    signed: true,
+                    period: None,
+                    detail: String::new(),
+                    record_change: None,
+                });
             }
             _ => return Err(unsupported(Kind::Rotary, h)),
         }
@@ -76,9 +96,9 @@ pub(crate) fn write(spec: &Spec, rng: &mut ChaCha8Rng, dir: &Path) -> std::io::R
         1,
         sigma_arcsec,
         rng,
-        |c, _, _| {
+        |c, sign, _| {
             let theta = c.to_radians();
-            let mut dev = zero + positioning.at(theta);
+            let mut dev = zero + positioning.at(theta) + 0.5 * reversal * sign;
             for &(amp, k, phase) in &harmonics {
                 dev += amp * (k * theta + phase).sin();
             }
