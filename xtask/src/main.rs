@@ -7,6 +7,27 @@
 //! `tests/reproduction_up_to_date.rs` runs the very same code.
 
 use std::process::{Command, ExitCode};
+
+/// `println!` that ends the program quietly (exit status 141, as a shell's for SIGPIPE) when
+/// stdout is closed, as by `| head`, instead of panicking.
+macro_rules! outln {
+    ($($arg:tt)*) => {{
+        use std::io::Write as _;
+        if writeln!(std::io::stdout(), $($arg)*).is_err() {
+            std::process::exit(141);
+        }
+    }};
+}
+
+/// `print!` that ends the program quietly when stdout is closed ([`outln!`]).
+macro_rules! out {
+    ($($arg:tt)*) => {{
+        use std::io::Write as _;
+        if write!(std::io::stdout(), $($arg)*).is_err() {
+            std::process::exit(141);
+        }
+    }};
+}
 use xtask::reproduce::{self, Freshness, PAPERS};
 
 const USAGE: &str = "usage: cargo xtask <reproduce [seed000|seed002|seed003|seed004|all] [--check] | reproduce seed003 --timing | bench [-- criterion args] | bench-diagnose [--rows N] [--seed S] | study [fdr|power|coverage|combined|openworld|all] [--n N] [--n-power M] [--seed S] [--kind axis|tracker|tracker-tools|rtest|rtest-head|points|points-targets|rotary] [--base-model omit] [--out FILE]>";
@@ -60,7 +81,7 @@ fn run_realistic(args: &[String]) -> Result<(), String> {
         let truth =
             xtask::realistic::points::write_points(seed, std::path::Path::new(dir), true, None)
                 .map_err(|e| format!("{dir}: {e}"))?;
-        println!(
+        outln!(
             "wrote {} ({} rows, noise {:.2} µm)",
             truth.manifest.display(),
             truth.rows,
@@ -87,7 +108,7 @@ fn run_realistic(args: &[String]) -> Result<(), String> {
     spec.targets = targets;
     let truth = xtask::realistic::write_spec(&spec, seed, dir).map_err(|e| e.to_string())?;
     for h in &hidden {
-        println!("hidden: {h:?}");
+        outln!("hidden: {h:?}");
     }
     // (A rotary table's noise is an angle: `noise_um` holds mrad.)
     let noise = if kind == xtask::realistic::Kind::Rotary {
@@ -95,7 +116,7 @@ fn run_realistic(args: &[String]) -> Result<(), String> {
     } else {
         format!("{:.2} µm", truth.noise_um)
     };
-    println!(
+    outln!(
         "wrote {} ({} observations, noise {noise})",
         truth.manifest.display(),
         truth.n_observations,
@@ -129,7 +150,7 @@ fn run_reproduce(args: &[String]) -> Result<(), String> {
         let text = reproduce::seed003::timing().map_err(|e| e.to_string())?;
         let path = reproduce::workspace_root().join("docs/reproduction/seed003-timing.md");
         std::fs::write(&path, text).map_err(|e| format!("{}: {e}", path.display()))?;
-        println!("wrote {}", path.display());
+        outln!("wrote {}", path.display());
         return Ok(());
     }
     let names: Vec<&str> = args
@@ -162,7 +183,7 @@ fn run_reproduce(args: &[String]) -> Result<(), String> {
             reproduce::write(&root, paper).map(|p| Ok(format!("wrote {}", p.display())))
         };
         match outcome {
-            Ok(Ok(msg)) => println!("{msg}"),
+            Ok(Ok(msg)) => outln!("{msg}"),
             Ok(Err(msg)) => {
                 eprintln!("{msg}");
                 failures.push(msg);
@@ -320,9 +341,9 @@ fn run_study(args: &[String]) -> Result<(), String> {
     match out {
         Some(path) => {
             std::fs::write(&path, &text).map_err(|e| format!("{path}: {e}"))?;
-            println!("wrote {path}");
+            outln!("wrote {path}");
         }
-        None => print!("{text}"),
+        None => out!("{text}"),
     }
     Ok(())
 }
@@ -356,11 +377,11 @@ fn run_bench_diagnose(args: &[String]) -> Result<(), String> {
     let _ = std::fs::remove_dir_all(&dir);
     let r = xtask::scale::run(rows, seed, &dir, 64.0)?;
     let gb = |g: Option<f64>| g.map_or("n/a".into(), |g| format!("{g:.2} GB"));
-    println!(
+    outln!(
         "| rows | read + prepare | diagnosis | ratio | peak memory after reading | peak memory | causes |"
     );
-    println!("|---:|---:|---:|---:|---:|---:|---|");
-    println!(
+    outln!("|---:|---:|---:|---:|---:|---:|---|");
+    outln!(
         "| {} | {:.2} s | {:.2} s | {:.1}× | {} | {} | {} |",
         r.rows,
         r.load_s,
@@ -396,17 +417,17 @@ fn run_bench(args: &[String]) -> Result<(), String> {
         .output()
         .map_err(|e| format!("cannot run cargo bench: {e}"))?;
     let stdout = String::from_utf8_lossy(&out.stdout);
-    print!("{stdout}");
+    out!("{stdout}");
     eprint!("{}", String::from_utf8_lossy(&out.stderr));
     if !out.status.success() {
         return Err(format!("cargo bench failed ({})", out.status));
     }
     let rows = parse_criterion(&stdout);
-    println!("\n| bench | median time |\n|---|---:|");
+    outln!("\n| bench | median time |\n|---|---:|");
     for (name, time) in &rows {
-        println!("| {name} | {time} |");
+        outln!("| {name} | {time} |");
     }
-    println!("\n{} benches", rows.len());
+    outln!("\n{} benches", rows.len());
     Ok(())
 }
 
