@@ -938,15 +938,35 @@ fn conclude(
         .collect();
     // A first-order drift's final value lies beyond the record, through a time constant the
     // data may bound on one side only: its 95 % interval by profile likelihood.
+    let mut unsettled = Vec::new();
     if let Some(t) = obs.variable_of_kind(VariableKind::Time) {
         let span = crate::basis::range(&t.values);
         let span = span.1 - span.0;
         let yw = obs.values.component_mul(w);
         let scale = covariance_scale(obs, extended.sigma0);
         for (k, c) in chosen.iter().enumerate() {
-            let Some((tau, coefficients)) =
-                settling_intervals(&searcher, c, &rests[k], &yw, fit.rss_w(), scale, span)
-            else {
+            let profile = |drift: &Drifting<'_>| {
+                settling_intervals(drift, &rests[k], &yw, fit.rss_w(), scale, span)
+            };
+            let tau = match c.term.family {
+                Family::Drift {
+                    time_constant_s: Some(tau),
+                } => tau,
+                // A linear drift: where a first-order one of the same parameter would settle.
+                Family::Drift {
+                    time_constant_s: None,
+                } => {
+                    unsettled.extend(unsettled_note(candidates, c, span, profile));
+                    continue;
+                }
+                _ => continue,
+            };
+            let Some((tau, coefficients)) = profile(&Drifting {
+                candidate: searcher.chosen_candidate(c),
+                variant: c.variant,
+                component: c.component,
+                tau,
+            }) else {
                 continue;
             };
             let f = &mut findings[k];
@@ -1177,6 +1197,7 @@ fn conclude(
         obs, candidates, &chosen, &terms, &fit, &covered,
     ));
     notes.extend(ambiguity_notes);
+    notes.extend(unsettled);
     notes.extend(compound.iter().map(|c| c.note.clone()));
     let residual_series = residual_series(
         obs,
@@ -3868,12 +3889,7 @@ fn drift_change(
         };
         let at = offsets[k] + j;
         let a = coef[at];
-        quantity = Some(match term.coefficients[j].1 {
-            Quantity::LengthRate => Quantity::Length,
-            Quantity::AngleRate => Quantity::Angle,
-            Quantity::RatioRate => Quantity::Ratio,
-            q => q,
-        });
+        quantity = Some(accumulated(term.coefficients[j].1));
         match time_constant_s {
             None => {
                 value += a * span;
@@ -3899,37 +3915,91 @@ fn drift_change(
     ))
 }
 
+/// What a rate of `q` accumulates to over time (a length for a length rate); other quantities
+/// as they are.
+fn accumulated(q: Quantity) -> Quantity {
+    match q {
+        Quantity::LengthRate => Quantity::Length,
+        Quantity::AngleRate => Quantity::Angle,
+        Quantity::RatioRate => Quantity::Ratio,
+        q => q,
+    }
+}
+
+/// For a drift found linear (`c`, over a record of `span` s): where the first-order drift of the
+/// same parameter (the library's next candidate) would settle, by its profile over time
+/// constants from a thirtieth of the record (`profile`, [`settling_intervals`]) — a drift that has
+/// not settled within the record fits as well at every longer time constant, and then has no
+/// final value the data bound. Said in one sentence; `None` where the library has no such
+/// candidate.
+fn unsettled_note(
+    candidates: &[Box<dyn Candidate>],
+    c: &Chosen,
+    span: f64,
+    profile: impl Fn(&Drifting<'_>) -> Option<(Interval, Vec<Interval>)>,
+) -> Option<String> {
+    let stem = c.term.name.strip_suffix(" drift")?;
+    let sibling = candidates.get(c.candidate + 1)?.as_ref();
+    let q = accumulated(c.term.coefficients.first()?.1);
+    (sibling.at(0, span)?.name == format!("{stem} drift exp")).then_some(())?;
+    let (tau, values) = profile(&Drifting {
+        candidate: sibling,
+        variant: 0,
+        component: 0,
+        tau: span,
+    })?;
+    let value = values.first()?;
+    Some(format!(
+        "{}: a first-order drift of {stem} fits these data as well (95 %: time constant {}, final value {}){}",
+        c.term.name,
+        tau.describe(Quantity::Duration),
+        value.describe(q),
+        if value.lower.is_none() || value.upper.is_none() {
+            "; the drift has not settled within the record, and where it ends the data do not say"
+        } else {
+            ""
+        }
+    ))
+}
+
+/// A first-order drift to profile ([`settling_intervals`]): a candidate's variant (and the
+/// component of a recurring cause) re-evaluated at any time constant, from `tau`.
+struct Drifting<'a> {
+    candidate: &'a dyn Candidate,
+    variant: usize,
+    component: usize,
+    tau: f64,
+}
+
 /// A first-order drift's time constant and coefficients (the values it settles to, beyond the
-/// record) by profile likelihood: the drift `c` at each time constant of a log grid from a
+/// record) by profile likelihood: the `drift` at each time constant of a log grid from a
 /// thirtieth of the one found to a thousand records (`span`, s), fitted beside the rest of the
 /// final model (`rest`, the fit without it; `yw` the whitened observations): the weighted RSS
 /// and the coefficients at each. The 95 % intervals hold the values whose profile χ² lies within
 /// 4 · `scale` of the least (`rss_final` at the time constant found, or below it on the grid):
 /// for a coefficient, at each admitted time constant its conditional interval narrowed by the
 /// RSS that time constant costs. An end the grid's last (or first) point still admits is open:
-/// a drift that need not settle within the record has no final value on that side. `None` for
-/// other terms, or where the candidate cannot re-evaluate the drift.
+/// a drift that need not settle within the record has no final value on that side. `None` where
+/// the candidate cannot re-evaluate the drift.
 fn settling_intervals(
-    searcher: &Searcher<'_>,
-    c: &Chosen,
+    drift: &Drifting<'_>,
     rest: &Projector,
     yw: &DVec,
     rss_final: f64,
     scale: f64,
     span: f64,
 ) -> Option<(Interval, Vec<Interval>)> {
-    let Family::Drift {
-        time_constant_s: Some(tau),
-    } = c.term.family
-    else {
-        return None;
-    };
     const COARSE: usize = 48;
     const FINE: usize = 64;
-    let candidate = searcher.chosen_candidate(c);
+    let &Drifting {
+        candidate,
+        variant,
+        component,
+        tau,
+    } = drift;
     // (time constant, RSS, coefficients, their conditional cofactors)
     let at = |t: f64| -> Option<(f64, f64, DVec, DVec)> {
-        let term = nth_component(candidate.at(c.variant, t)?, c.component);
+        let term = nth_component(candidate.at(variant, t)?, component);
         let cw = rest.residual_part(&term.columns);
         let inverse = cw.tr_mul(&cw).try_inverse()?;
         let b = cw.tr_mul(yw);
@@ -3959,12 +4029,14 @@ fn settling_intervals(
         .collect::<Option<Vec<_>>>()?;
     profile.extend(coarse);
     profile.sort_by(|a, b| a.0.total_cmp(&b.0));
+    profile.dedup_by(|a, b| (a.0 - b.0).abs() <= 1e-9 * b.0);
     let least = profile.iter().map(|p| p.1).fold(least, f64::min);
     let inside = |p: &(f64, f64, DVec, DVec)| p.1 - least < 4.0 * scale;
     let admitted: Vec<_> = profile.iter().filter(|p| inside(p)).collect();
-    let (&first, &last) = (admitted.first()?, admitted.last()?);
-    let (lowest, highest) = (&profile[0], &profile[profile.len() - 1]);
-    let (open_low, open_high) = (inside(lowest), inside(highest));
+    let first = profile.iter().position(inside)?;
+    let last = profile.iter().rposition(inside)?;
+    let n = profile.len();
+    let open_high = last == n - 1;
     // An end of the time constant's interval: where the profile crosses 4 between the admitted
     // point and its neighbour outside (linear in RSS against log τ).
     let crossing = |inner: &(f64, f64, DVec, DVec), outer: &(f64, f64, DVec, DVec)| {
@@ -3972,18 +4044,11 @@ fn settling_intervals(
         let f = ((limit - inner.1) / (outer.1 - inner.1)).clamp(0.0, 1.0);
         (inner.0.ln() + f * (outer.0.ln() - inner.0.ln())).exp()
     };
-    let index = |p: &(f64, f64, DVec, DVec)| profile.iter().position(|q| q.0 == p.0);
     let tau_interval = Interval {
-        lower: (!open_low).then(|| {
-            index(first).map_or(first.0, |i| crossing(first, &profile[i.saturating_sub(1)]))
-        }),
-        upper: (!open_high).then(|| {
-            index(last).map_or(last.0, |i| {
-                crossing(last, &profile[(i + 1).min(profile.len() - 1)])
-            })
-        }),
+        lower: (first > 0).then(|| crossing(&profile[first], &profile[first - 1])),
+        upper: (!open_high).then(|| crossing(&profile[last], &profile[last + 1])),
     };
-    let coefficients = (0..c.term.width())
+    let coefficients = (0..profile[0].2.len())
         .map(|j| {
             let (mut lower, mut upper) = (f64::INFINITY, f64::NEG_INFINITY);
             for p in &admitted {
@@ -3991,28 +4056,23 @@ fn settling_intervals(
                 lower = lower.min(p.2[j] - half);
                 upper = upper.max(p.2[j] + half);
             }
-            // Open where the admitted range reaches the grid's end: towards where the
-            // coefficient goes as the time constant does.
-            let towards =
-                |end: &(f64, f64, DVec, DVec), next: &(f64, f64, DVec, DVec)| end.2[j] > next.2[j];
-            let mut interval = Interval {
-                lower: Some(lower),
-                upper: Some(upper),
-            };
-            let n = profile.len();
-            for (open, end, next) in [
-                (open_high, &profile[n - 1], &profile[n - 2]),
-                (open_low, &profile[0], &profile[1]),
-            ] {
-                if open {
-                    if towards(end, next) {
-                        interval.upper = None;
-                    } else {
-                        interval.lower = None;
-                    }
-                }
+            // Open where the admitted range reaches the longest time constant: towards where
+            // the coefficient goes as the time constant grows (a drift that need not settle
+            // within the record). (Towards the shortest, a drift becomes a step of bounded size.)
+            match (open_high, profile[n - 1].2[j] > profile[n - 2].2[j]) {
+                (false, _) => Interval {
+                    lower: Some(lower),
+                    upper: Some(upper),
+                },
+                (true, true) => Interval {
+                    lower: Some(lower),
+                    upper: None,
+                },
+                (true, false) => Interval {
+                    lower: None,
+                    upper: Some(upper),
+                },
             }
-            interval
         })
         .collect();
     Some((tau_interval, coefficients))
@@ -4020,7 +4080,8 @@ fn settling_intervals(
 
 /// Drifts found in one form (linear or first-order) whose course the data say is another: a
 /// smooth curve of the same parameter in time (its column times Legendre polynomials of degree
-/// 1–4 in t; of both parameters an expansion about a point drifts) still explains significantly more once the final model holds them (F test,
+/// 1–4 in t; of both parameters an expansion about a point drifts) still explains significantly
+/// more once the final model holds them (F test,
 /// Bonferroni over the drifts tested, at [`COMPLETION_LEVEL`] as for a periodic finding's shape
 /// in [`periodic_shapes`]; `fit`: the final model's). Said in one sentence: the finding
 /// describes a drift of that parameter, not its course.

@@ -237,6 +237,19 @@ impl Interval {
     pub fn contains(&self, v: f64) -> bool {
         self.lower.is_none_or(|l| v >= l) && self.upper.is_none_or(|u| v <= u)
     }
+
+    /// The interval in words, in the units engineers read `q` in: "between a and b",
+    /// "a or above", "b or below", "any value".
+    pub fn describe(&self, q: Quantity) -> String {
+        match (self.lower, self.upper) {
+            (Some(a), Some(b)) => {
+                format!("between {} and {}", q.format_value(a), q.format_value(b))
+            }
+            (Some(a), None) => format!("{} or above", q.format_value(a)),
+            (None, Some(b)) => format!("{} or below", q.format_value(b)),
+            (None, None) => "any value".to_string(),
+        }
+    }
 }
 
 impl Estimate {

@@ -312,6 +312,48 @@ fn a_drift_still_rising_at_the_end_of_the_record_has_a_final_value_interval_long
     );
 }
 
+/// A screw expanding so slowly (time constant six records) that the data show an almost
+/// straight rise: found as a linear drift of the scale, whose report says where a first-order
+/// drift would settle — a 95 % range (open above where the data set no bound) that holds the
+/// truth and lies beyond the change over the record.
+#[test]
+fn a_drift_found_linear_says_where_a_first_order_one_would_settle() {
+    let tau_s = 6.0 * LAST_T_S;
+    let hidden = Hidden {
+        expansion_ppm: 40.0,
+        expansion_tau_s: tau_s,
+        ..Hidden::default()
+    };
+    let d = run(&write_dataset("expansion-linear", hidden, 25));
+    let report = mte_diagnose::report::markdown(&d, "expansion-linear");
+    assert!(
+        d.findings.iter().any(|f| f.name == "EXX scale drift"),
+        "{report}"
+    );
+    let note = d
+        .notes
+        .iter()
+        .find(|n| n.starts_with("EXX scale drift: a first-order drift of EXX scale"))
+        .unwrap_or_else(|| panic!("{report}"));
+    // "final value between a ppm and b ppm" or "final value a ppm or above".
+    let range = note.split("final value ").nth(1).unwrap_or_default();
+    let numbers: Vec<f64> = range
+        .split(|c: char| c.is_whitespace() || c == ')')
+        .filter_map(|w| w.parse().ok())
+        .take(if range.starts_with("between") { 2 } else { 1 })
+        .collect();
+    let (lower, upper) = match numbers[..] {
+        [a, b] => (a, b),
+        [a] if range.contains("or above") => (a, f64::INFINITY),
+        _ => panic!("{note}"),
+    };
+    let change = 40.0 * (1.0 - (-LAST_T_S / tau_s).exp());
+    assert!(
+        lower <= 40.0 && 40.0 <= upper && lower > 0.8 * change,
+        "{note}: change over the record {change:.2} ppm"
+    );
+}
+
 /// An ISO 230-2 export without times: a zero drifting at 0.1 µm/min shows as the zero shifting
 /// from run to run (808 s per run: 1.35 µm a run), each run's offset against the first within
 /// 3 u, and the finding says that a reversal found beside it may be the drift within each run.
