@@ -798,10 +798,42 @@ fn conclude(
             at += width;
         }
         let extended_parameters = parameters(&terms, &sol.coef, &cov);
-        let z = |p: &[ParameterEstimate], k: usize| {
-            largest_z(&p[base.len() + k].estimates, causes[k].width())
+        // How well the data determine a cause's size: its largest |estimate| ÷ u; for a drift
+        // also its change over the measured time, which the data determine far better than a
+        // first-order drift's final value beyond them (a slow drift strongly in the data can
+        // have a final value within 2 u of zero).
+        let offsets: Vec<usize> = causes
+            .iter()
+            .scan(x0.ncols(), |at, t| {
+                let first = *at;
+                *at += t.width();
+                Some(first)
+            })
+            .collect();
+        let z = |p: &[ParameterEstimate], cov: &DMat, k: usize| {
+            let own = largest_z(&p[base.len() + k].estimates, causes[k].width());
+            let change = match causes[k].family {
+                Family::Drift { .. } => crate::candidate::drifted_parameters(&causes[k])
+                    .into_iter()
+                    .filter_map(|stem| {
+                        drift_change(
+                            obs,
+                            &chosen,
+                            &[k],
+                            stem,
+                            &offsets,
+                            &sol.coef,
+                            cov,
+                            &hyper_rows,
+                        )
+                    })
+                    .map(|e| e.value.abs() / e.uncertainty.max(1e-300))
+                    .fold(0.0, f64::max),
+                _ => 0.0,
+            };
+            own.max(change)
         };
-        let Some((k, held)) = leaving(&held, |k| z(&extended_parameters, k)) else {
+        let Some((k, held)) = leaving(&held, |k| z(&extended_parameters, &cov, k)) else {
             break (
                 terms,
                 x,
@@ -819,7 +851,7 @@ fn conclude(
         // periodic error drawn to one period — leaves as pruned.)
         let on_orders = match held {
             Some(held) => held == Held::ByOrders,
-            None => z(&parameters(&terms, &sol.coef, &plain), k) >= 2.0,
+            None => z(&parameters(&terms, &sol.coef, &plain), &plain, k) >= 2.0,
         };
         if on_orders {
             let others: Vec<&Term> = causes
@@ -971,10 +1003,15 @@ fn conclude(
             };
             let f = &mut findings[k];
             for (e, profile) in f.estimates.iter_mut().zip(coefficients) {
-                // Never narrower than the linearisation's ± 2 u.
-                let interval = Interval {
-                    lower: profile.lower.map(|l| l.min(e.value - 2.0 * e.uncertainty)),
-                    upper: profile.upper.map(|u| u.max(e.value + 2.0 * e.uncertainty)),
+                // A closed interval never narrower than the linearisation's ± 2 u (which holds
+                // the widenings for repeated poses and the base's orders); an open one is the
+                // profile's (the linearisation says nothing of a drift that need not settle).
+                let interval = match (profile.lower, profile.upper) {
+                    (Some(l), Some(u)) => Interval {
+                        lower: Some(l.min(e.value - 2.0 * e.uncertainty)),
+                        upper: Some(u.max(e.value + 2.0 * e.uncertainty)),
+                    },
+                    _ => profile,
                 };
                 *e = e.clone().with_interval(interval);
             }

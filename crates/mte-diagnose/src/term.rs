@@ -267,14 +267,7 @@ impl Estimate {
 
     /// The estimate with its 95 % interval, which the text states after value ± u.
     pub fn with_interval(mut self, interval: Interval) -> Self {
-        let end =
-            |v: Option<f64>| v.map_or("no bound".to_string(), |v| self.quantity.format_value(v));
-        self.text = format!(
-            "{} (95 % interval {} to {})",
-            self.text,
-            end(interval.lower),
-            end(interval.upper)
-        );
+        self.text = format!("{} (95 %: {})", self.text, interval.describe(self.quantity));
         self.interval = Some(interval);
         self
     }

@@ -354,6 +354,46 @@ fn a_drift_found_linear_says_where_a_first_order_one_would_settle() {
     );
 }
 
+/// A screw fixed mid-travel expanding slowly (time constant 1.5 records): the final scale and
+/// zero changes are far beyond the record and within 2 u of zero each by the linearisation,
+/// but the change over the record is plain in the data. The expansion is kept (a drift's size
+/// the data determine is its change over the measured time), sized, and the final scale
+/// change's 95 % interval holds the truth.
+#[test]
+fn a_slow_expansion_about_a_bearing_is_kept_by_its_change_over_the_record() {
+    let tau_s = 1.5 * LAST_T_S;
+    let hidden = Hidden {
+        expansion_ppm: 4.0,
+        expansion_tau_s: tau_s,
+        expansion_fixed_mm: 500.0,
+        ..Hidden::default()
+    };
+    let d = run(&write_dataset("expansion-slow-bearing", hidden, 26));
+    let report = mte_diagnose::report::markdown(&d, "expansion-slow-bearing");
+    let f = d
+        .findings
+        .iter()
+        .find(|f| f.name.starts_with("EXX scale drift"))
+        .unwrap_or_else(|| panic!("{report}"));
+    let change = f
+        .estimates
+        .iter()
+        .find(|e| e.name == "EXX scale change over the measured time")
+        .unwrap_or_else(|| panic!("{report}"));
+    let truth = 4.0 * (1.0 - (-LAST_T_S / tau_s).exp());
+    assert!(
+        within(change.value * 1e6, change.uncertainty * 1e6, truth, 2.0),
+        "{}, truth {truth:.2} ppm",
+        change.text
+    );
+    let final_value = &f.estimates[0];
+    assert!(
+        final_value.interval.is_some_and(|i| i.contains(4e-6)),
+        "{}",
+        final_value.text
+    );
+}
+
 /// An ISO 230-2 export without times: a zero drifting at 0.1 µm/min shows as the zero shifting
 /// from run to run (808 s per run: 1.35 µm a run), each run's offset against the first within
 /// 3 u, and the finding says that a reversal found beside it may be the drift within each run.
