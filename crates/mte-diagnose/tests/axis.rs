@@ -266,6 +266,42 @@ fn a_screw_expanding_as_it_warms_is_the_scale_drifting_with_its_time_constant() 
     );
 }
 
+/// The diagnosis of a screw expanding by `ppm` with a time constant of `records` records about
+/// `fixed_mm` (the test's dataset `name`, `seed`), and its report.
+fn slow_expansion(
+    name: &str,
+    ppm: f64,
+    records: f64,
+    fixed_mm: f64,
+    seed: u64,
+) -> (mte_diagnose::Diagnosis, String) {
+    let hidden = Hidden {
+        expansion_ppm: ppm,
+        expansion_tau_s: records * LAST_T_S,
+        expansion_fixed_mm: fixed_mm,
+        ..Hidden::default()
+    };
+    let d = run(&write_dataset(name, hidden, seed));
+    let report = mte_diagnose::report::markdown(&d, name);
+    (d, report)
+}
+
+/// Asserts that `f` states the scale's change over the measured time of an expansion by `ppm`
+/// with a time constant of `records` records within 2 u.
+fn assert_scale_change(f: &mte_diagnose::Finding, ppm: f64, records: f64) {
+    let change = f
+        .estimates
+        .iter()
+        .find(|e| e.name == "EXX scale change over the measured time")
+        .unwrap_or_else(|| panic!("no change over the measured time: {f:?}"));
+    let truth = ppm * (1.0 - (-1.0 / records).exp());
+    assert!(
+        within(change.value * 1e6, change.uncertainty * 1e6, truth, 2.0),
+        "{}, truth {truth:.2} ppm",
+        change.text
+    );
+}
+
 /// A screw still expanding at the end of the record (time constant twice the record): the data
 /// show its course better than where it settles. The final value's 95 % interval (profile
 /// likelihood over the time constant) holds the truth and reaches further above than the
@@ -273,14 +309,7 @@ fn a_screw_expanding_as_it_warms_is_the_scale_drifting_with_its_time_constant() 
 /// and the change over the measured time is sized.
 #[test]
 fn a_drift_still_rising_at_the_end_of_the_record_has_a_final_value_interval_longer_above() {
-    let tau_s = 2.0 * LAST_T_S;
-    let hidden = Hidden {
-        expansion_ppm: 40.0,
-        expansion_tau_s: tau_s,
-        ..Hidden::default()
-    };
-    let d = run(&write_dataset("expansion-slow", hidden, 24));
-    let report = mte_diagnose::report::markdown(&d, "expansion-slow");
+    let (d, report) = slow_expansion("expansion-slow", 40.0, 2.0, 0.0, 24);
     let f = d
         .findings
         .iter()
@@ -299,17 +328,7 @@ fn a_drift_still_rising_at_the_end_of_the_record_has_a_final_value_interval_long
         "{}",
         e.text
     );
-    let change = f
-        .estimates
-        .iter()
-        .find(|e| e.name.ends_with("change over the measured time"))
-        .unwrap_or_else(|| panic!("{report}"));
-    let truth = 40.0 * (1.0 - (-LAST_T_S / tau_s).exp());
-    assert!(
-        within(change.value * 1e6, change.uncertainty * 1e6, truth, 2.0),
-        "{}, truth {truth:.2} ppm",
-        change.text
-    );
+    assert_scale_change(f, 40.0, 2.0);
 }
 
 /// A screw expanding so slowly (time constant six records) that the data show an almost
@@ -318,14 +337,7 @@ fn a_drift_still_rising_at_the_end_of_the_record_has_a_final_value_interval_long
 /// truth and lies beyond the change over the record.
 #[test]
 fn a_drift_found_linear_says_where_a_first_order_one_would_settle() {
-    let tau_s = 6.0 * LAST_T_S;
-    let hidden = Hidden {
-        expansion_ppm: 40.0,
-        expansion_tau_s: tau_s,
-        ..Hidden::default()
-    };
-    let d = run(&write_dataset("expansion-linear", hidden, 25));
-    let report = mte_diagnose::report::markdown(&d, "expansion-linear");
+    let (d, report) = slow_expansion("expansion-linear", 40.0, 6.0, 0.0, 25);
     assert!(
         d.findings.iter().any(|f| f.name == "EXX scale drift"),
         "{report}"
@@ -347,7 +359,7 @@ fn a_drift_found_linear_says_where_a_first_order_one_would_settle() {
         [a] if range.contains("or above") => (a, f64::INFINITY),
         _ => panic!("{note}"),
     };
-    let change = 40.0 * (1.0 - (-LAST_T_S / tau_s).exp());
+    let change = 40.0 * (1.0 - (-1.0 / 6.0_f64).exp());
     assert!(
         lower <= 40.0 && 40.0 <= upper && lower > 0.8 * change,
         "{note}: change over the record {change:.2} ppm"
@@ -361,31 +373,13 @@ fn a_drift_found_linear_says_where_a_first_order_one_would_settle() {
 /// change's 95 % interval holds the truth.
 #[test]
 fn a_slow_expansion_about_a_bearing_is_kept_by_its_change_over_the_record() {
-    let tau_s = 1.5 * LAST_T_S;
-    let hidden = Hidden {
-        expansion_ppm: 4.0,
-        expansion_tau_s: tau_s,
-        expansion_fixed_mm: 500.0,
-        ..Hidden::default()
-    };
-    let d = run(&write_dataset("expansion-slow-bearing", hidden, 26));
-    let report = mte_diagnose::report::markdown(&d, "expansion-slow-bearing");
+    let (d, report) = slow_expansion("expansion-slow-bearing", 4.0, 1.5, 500.0, 26);
     let f = d
         .findings
         .iter()
         .find(|f| f.name.starts_with("EXX scale drift"))
         .unwrap_or_else(|| panic!("{report}"));
-    let change = f
-        .estimates
-        .iter()
-        .find(|e| e.name == "EXX scale change over the measured time")
-        .unwrap_or_else(|| panic!("{report}"));
-    let truth = 4.0 * (1.0 - (-LAST_T_S / tau_s).exp());
-    assert!(
-        within(change.value * 1e6, change.uncertainty * 1e6, truth, 2.0),
-        "{}, truth {truth:.2} ppm",
-        change.text
-    );
+    assert_scale_change(f, 4.0, 1.5);
     let final_value = &f.estimates[0];
     assert!(
         final_value.interval.is_some_and(|i| i.contains(4e-6)),
