@@ -802,17 +802,10 @@ fn conclude(
         // also its change over the measured time, which the data determine far better than a
         // first-order drift's final value beyond them (a slow drift strongly in the data can
         // have a final value within 2 u of zero).
-        let offsets: Vec<usize> = causes
-            .iter()
-            .scan(x0.ncols(), |at, t| {
-                let first = *at;
-                *at += t.width();
-                Some(first)
-            })
-            .collect();
+        let offsets = column_offsets(x0.ncols(), causes);
         let z = |p: &[ParameterEstimate], cov: &DMat, k: usize| {
             let own = largest_z(&p[base.len() + k].estimates, causes[k].width());
-            let change = match causes[k].family {
+            let changes: Vec<Estimate> = match causes[k].family {
                 Family::Drift { .. } => crate::candidate::drifted_parameters(&causes[k])
                     .into_iter()
                     .filter_map(|stem| {
@@ -827,11 +820,10 @@ fn conclude(
                             &hyper_rows,
                         )
                     })
-                    .map(|e| e.value.abs() / e.uncertainty.max(1e-300))
-                    .fold(0.0, f64::max),
-                _ => 0.0,
+                    .collect(),
+                _ => Vec::new(),
             };
-            own.max(change)
+            own.max(largest_z(&changes, changes.len()))
         };
         let Some((k, held)) = leaving(&held, |k| z(&extended_parameters, &cov, k)) else {
             break (
@@ -937,14 +929,7 @@ fn conclude(
     // A drift's size over the data: the change of its parameter from the first reading to the
     // last (a first-order drift's own size is the asymptote, beyond the data; a linear one's
     // is a rate).
-    let offsets: Vec<usize> = chosen
-        .iter()
-        .scan(base.iter().map(Term::width).sum::<usize>(), |at, c| {
-            let first = *at;
-            *at += c.term.width();
-            Some(first)
-        })
-        .collect();
+    let offsets = column_offsets(x0.ncols(), chosen.iter().map(|c| &c.term));
     let change = |members: &[usize], stem: &str| {
         drift_change(
             obs,
@@ -3952,6 +3937,18 @@ fn drift_change(
     ))
 }
 
+/// The first design column of each of `terms`, laid out one after another from column `first`.
+fn column_offsets<'a>(first: usize, terms: impl IntoIterator<Item = &'a Term>) -> Vec<usize> {
+    terms
+        .into_iter()
+        .scan(first, |at, t| {
+            let start = *at;
+            *at += t.width();
+            Some(start)
+        })
+        .collect()
+}
+
 /// What a rate of `q` accumulates to over time (a length for a length rate); other quantities
 /// as they are.
 fn accumulated(q: Quantity) -> Quantity {
@@ -4015,9 +4012,11 @@ struct Drifting<'a> {
 /// and the coefficients at each. The 95 % intervals hold the values whose profile χ² lies within
 /// 4 · `scale` of the least (`rss_final` at the time constant found, or below it on the grid):
 /// for a coefficient, at each admitted time constant its conditional interval narrowed by the
-/// RSS that time constant costs. An end the grid's last (or first) point still admits is open:
-/// a drift that need not settle within the record has no final value on that side. `None` where
-/// the candidate cannot re-evaluate the drift.
+/// RSS that time constant costs. The time constant's interval is open at an end of the grid the
+/// profile still admits; a coefficient's only where the longest time constant is admitted (a
+/// drift that need not settle within the record has no final value on that side; towards the
+/// shortest, a drift becomes a step of bounded size). `None` where the candidate cannot
+/// re-evaluate the drift.
 fn settling_intervals(
     drift: &Drifting<'_>,
     rest: &Projector,
@@ -4093,22 +4092,12 @@ fn settling_intervals(
                 lower = lower.min(p.2[j] - half);
                 upper = upper.max(p.2[j] + half);
             }
-            // Open where the admitted range reaches the longest time constant: towards where
-            // the coefficient goes as the time constant grows (a drift that need not settle
-            // within the record). (Towards the shortest, a drift becomes a step of bounded size.)
-            match (open_high, profile[n - 1].2[j] > profile[n - 2].2[j]) {
-                (false, _) => Interval {
-                    lower: Some(lower),
-                    upper: Some(upper),
-                },
-                (true, true) => Interval {
-                    lower: Some(lower),
-                    upper: None,
-                },
-                (true, false) => Interval {
-                    lower: None,
-                    upper: Some(upper),
-                },
+            // Open where the admitted range reaches the longest time constant, towards where
+            // the coefficient goes as the time constant grows.
+            let grows = profile[n - 1].2[j] > profile[n - 2].2[j];
+            Interval {
+                lower: (!open_high || grows).then_some(lower),
+                upper: (!open_high || !grows).then_some(upper),
             }
         })
         .collect();
@@ -5217,10 +5206,6 @@ impl ResidualSeries {
 mod tests {
     use super::*;
 
-    fn estimate(name: &str, value: f64, uncertainty: f64, quantity: Quantity) -> Estimate {
-        Estimate::new(name, value, uncertainty, quantity)
-    }
-
     /// A periodic finding of X with `period` mm and `amplitude` µm (u 1 % of each).
     fn periodic(name: &str, period: f64, amplitude_um: f64) -> Finding {
         Finding {
@@ -5228,13 +5213,13 @@ mod tests {
             label: String::new(),
             meaning: String::new(),
             family: Family::Periodic { period },
-            estimates: vec![estimate(
+            estimates: vec![Estimate::new(
                 "amplitude",
                 amplitude_um * 1e-3,
                 amplitude_um * 1e-5,
                 Quantity::Length,
             )],
-            hyper_parameter: Some(estimate(
+            hyper_parameter: Some(Estimate::new(
                 "period",
                 period,
                 period * 1e-3,

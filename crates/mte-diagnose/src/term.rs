@@ -298,9 +298,6 @@ impl Term {
 
     /// Reported estimates from the term's coefficients and their covariance block.
     pub fn estimates(&self, coef: &[f64], cov: &DMat) -> Vec<Estimate> {
-        let make = |name: &str, value: f64, u: f64, quantity: Quantity| {
-            Estimate::new(name, value, u, quantity)
-        };
         match &self.summary {
             Summary::FixedPoint(name) if coef.len() == 2 => {
                 let (s, z) = (coef[0], coef[1]);
@@ -313,10 +310,15 @@ impl Term {
                 let mut out: Vec<Estimate> = (0..2)
                     .map(|i| {
                         let (n, q) = &self.coefficients[i];
-                        make(n, coef[i], cov[(i, i)].max(0.0).sqrt(), *q)
+                        Estimate::new(n, coef[i], cov[(i, i)].max(0.0).sqrt(), *q)
                     })
                     .collect();
-                out.push(make(name, x, var.max(0.0).sqrt(), Quantity::Distance));
+                out.push(Estimate::new(
+                    name,
+                    x,
+                    var.max(0.0).sqrt(),
+                    Quantity::Distance,
+                ));
                 out
             }
             Summary::Amplitude if coef.len() == 2 => {
@@ -331,7 +333,7 @@ impl Term {
                 let var = g[0] * g[0] * cov[(0, 0)]
                     + 2.0 * g[0] * g[1] * cov[(0, 1)]
                     + g[1] * g[1] * cov[(1, 1)];
-                vec![make(
+                vec![Estimate::new(
                     "amplitude",
                     amp,
                     var.max(0.0).sqrt(),
@@ -342,7 +344,7 @@ impl Term {
                 .coefficients
                 .iter()
                 .enumerate()
-                .map(|(i, (name, q))| make(name, coef[i], cov[(i, i)].max(0.0).sqrt(), *q))
+                .map(|(i, (name, q))| Estimate::new(name, coef[i], cov[(i, i)].max(0.0).sqrt(), *q))
                 .collect(),
         }
     }
