@@ -219,6 +219,11 @@ fn an_expansion_about_a_point_standing_in_for_a_zero_that_rises_and_falls_is_qua
         let spec = xtask::realistic::Spec::new(Kind::Axis, &hidden);
         let d = diagnosed(&spec, seed);
         let names: Vec<&str> = d.findings.iter().map(|f| f.name.as_str()).collect();
+        // The case this test is about: the expansion is among the findings.
+        assert!(
+            names.iter().any(|n| n.ends_with("about a point")),
+            "seed {seed}: {names:?}"
+        );
         for f in d
             .findings
             .iter()
