@@ -498,25 +498,36 @@ pub fn physical_effects(
                         .exposed_by(axis.clone()),
                     ));
                 }
-                if *positioning {
-                    let (name, axis_name, slot_name, quantity) = (
-                        slot.name.clone(),
-                        axis.clone(),
-                        slot.name.clone(),
-                        slot.quantity,
-                    );
-                    let separated_by = slot.separated_by.clone();
-                    let make = move |p: f64, cols: DMat| Term {
-                        name: format!("{name} periodic"),
-                        label: format!("periodic positioning error of {axis_name} ({slot_name})"),
-                        meaning: format!(
-                            "positioning error of {axis_name} repeating every {} ({})",
-                            format_period(p, rotary),
+                // A positioning error repeating along the axis; over a full turn, every error
+                // motion of a rotary axis as its harmonics (the form of a bearing race, a
+                // wobble), where no polynomial in the angle is searched.
+                if *positioning || full_turn {
+                    let (name, axis_name, quantity) =
+                        (slot.name.clone(), axis.clone(), slot.quantity);
+                    let (label, what, cause) = if *positioning {
+                        (
+                            format!("periodic positioning error of {axis} ({})", slot.name),
+                            format!("positioning error of {axis}"),
                             if rotary {
                                 "encoder eccentricity or graduation error, worm-gear tooth error"
                             } else {
                                 "ball-screw pitch, encoder or gear error"
-                            }
+                            },
+                        )
+                    } else {
+                        (
+                            format!("{}, periodic over a turn ({})", slot.label, slot.name),
+                            slot.label.clone(),
+                            "the form of a bearing race, a wobble of the axis, an eccentric part",
+                        )
+                    };
+                    let separated_by = slot.separated_by.clone();
+                    let make = move |p: f64, cols: DMat| Term {
+                        name: format!("{name} periodic"),
+                        label: label.clone(),
+                        meaning: format!(
+                            "{what} repeating every {} ({cause})",
+                            format_period(p, rotary),
                         ),
                         family: Family::Periodic { period: p },
                         columns: cols,
@@ -539,7 +550,7 @@ pub fn physical_effects(
                             make,
                         )));
                     }
-                    if let Some(d) = &direction {
+                    if let Some(d) = direction.as_ref().filter(|_| *positioning) {
                         let cols = DMat::from_fn(n, 1, |i, _| slot.column[i] * 0.5 * d[i]);
                         out.push(Box::new(
                             term(

@@ -3961,7 +3961,7 @@ fn accumulated(q: Quantity) -> Quantity {
 }
 
 /// For a drift found linear (`c`, over a record of `span` s): where the first-order drift of the
-/// same parameter (the library's next candidate) would settle, by its profile over time
+/// same parameter (its twin in the library) would settle, by its profile over time
 /// constants from a thirtieth of the record (`profile`, [`settling_intervals`]) — a drift that has
 /// not settled within the record fits as well at every longer time constant, and then has no
 /// final value the data bound. Said in one sentence; `None` where the library has no such
@@ -3973,9 +3973,15 @@ fn unsettled_note(
     profile: impl Fn(&Drifting<'_>) -> Option<(Interval, Vec<Interval>)>,
 ) -> Option<String> {
     let stem = c.term.name.strip_suffix(" drift")?;
-    let sibling = candidates.get(c.candidate + 1)?.as_ref();
+    // Its first-order twin: the candidate that builds on the same term, named so.
+    let required = candidates.get(c.candidate)?.requires();
+    let twin = format!("{stem} drift exp");
+    let sibling = candidates
+        .iter()
+        .filter(|k| k.requires() == required)
+        .find(|k| k.at(0, span).is_some_and(|t| t.name == twin))?
+        .as_ref();
     let q = accumulated(c.term.coefficients.first()?.1);
-    (sibling.at(0, span)?.name == format!("{stem} drift exp")).then_some(())?;
     let (tau, values) = profile(&Drifting {
         candidate: sibling,
         variant: 0,

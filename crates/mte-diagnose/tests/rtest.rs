@@ -16,10 +16,14 @@ use rand_distr::{Distribution, Normal};
 const MACHINE: &str = "seed002-bc-trunnion";
 const NOISE_UM: f64 = 0.5;
 
-/// An injected error: machine slot name and a value as a function of time (s).
+/// A slot's value (mm, rad) as a function of time (s) and of the axis positions (X, Y, Z mm,
+/// B, C rad).
+type SlotValue = Box<dyn Fn(f64, &[f64]) -> f64>;
+
+/// An injected error: machine slot name and its value.
 struct Injected {
     slot: &'static str,
-    value: Box<dyn Fn(f64) -> f64>,
+    value: SlotValue,
 }
 
 /// The B axis line displaced by `delta` (mm) along machine direction `k` while the cradle was set
@@ -34,11 +38,11 @@ fn b_pivot_shift(k: usize, delta: impl Fn(f64) -> f64 + Clone + 'static) -> Vec<
     vec![
         Injected {
             slot: b,
-            value: Box::new(delta),
+            value: Box::new(move |t, _| delta(t)),
         },
         Injected {
             slot: c,
-            value: Box::new(move |t| -d2(t)),
+            value: Box::new(move |t, _| -d2(t)),
         },
     ]
 }
@@ -57,11 +61,11 @@ fn c_pivot_shift(k: usize, delta: impl Fn(f64) -> f64 + Clone + 'static) -> Vec<
     vec![
         Injected {
             slot: c,
-            value: Box::new(delta),
+            value: Box::new(move |t, _| delta(t)),
         },
         Injected {
             slot: w,
-            value: Box::new(move |t| -d2(t)),
+            value: Box::new(move |t, _| -d2(t)),
         },
     ]
 }
@@ -82,10 +86,19 @@ fn b_tilt_about_x(alpha: f64) -> Vec<Injected> {
     ]
 }
 
+/// An error motion of the C table (slot `C.motion.*`, in C's moved frame) repeating `k` times a
+/// turn: `amplitude · sin(k·c + phase)` at the C angle c.
+fn c_error_motion(slot: &'static str, amplitude: f64, k: f64, phase: f64) -> Injected {
+    Injected {
+        slot,
+        value: Box::new(move |_, q| amplitude * (k * q[4] + phase).sin()),
+    }
+}
+
 fn constant(slot: &'static str, value: f64) -> Injected {
     Injected {
         slot,
-        value: Box::new(move |_| value),
+        value: Box::new(move |_, _| value),
     }
 }
 
@@ -135,10 +148,10 @@ fn write_dataset_with_base(
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     let noise = Normal::new(0.0, NOISE_UM).unwrap();
     let zero = vec![0.0; n_slots];
-    let errors_at = |t: f64| {
+    let errors_at = |t: f64, q: &[f64]| {
         let mut e = vec![0.0; n_slots];
         for inj in errors {
-            e[machine.slot_index_by_name(inj.slot).unwrap()] += (inj.value)(t);
+            e[machine.slot_index_by_name(inj.slot).unwrap()] += (inj.value)(t, q);
         }
         e
     };
@@ -169,7 +182,7 @@ fn write_dataset_with_base(
             // nest centre (the tool point) is, in table coordinates.
             let q_ref = command(ball, 0.0, c_bk1.to_radians());
             let ball_actual = machine
-                .tool_in_workpiece(&q_ref, &errors_at(t))
+                .tool_in_workpiece(&q_ref, &errors_at(t, &q_ref))
                 .translation
                 .vector;
             let setup_id = format!("{id}-{cycle}");
@@ -194,7 +207,7 @@ fn write_dataset_with_base(
             );
             for &(test, b, c) in &program {
                 let q = command(ball, b, c);
-                let poses = machine.branch_poses(&q, &errors_at(t));
+                let poses = machine.branch_poses(&q, &errors_at(t, &q));
                 let reading = (poses.workpiece_in_base
                     * mte_linalg::nalgebra::Point3::from(ball_actual)
                     - poses.tool_in_base.translation.vector)
@@ -522,4 +535,48 @@ fn both_rotary_lines_drifting_together_are_one_drift_whose_pair_is_named() {
         "{} vs {truth}: {report}",
         change.text
     );
+}
+
+#[test]
+fn error_motions_of_the_c_table_over_a_turn_are_named_against_the_location_model() {
+    // The default base (the location errors) has no error motion of C: over its full turn the
+    // table's axial error motion two per turn (a bearing race's ovality, 2 µm) and its tilt
+    // about X three per turn (a wobble, 15 µrad) are what the model gets wrong, each named with
+    // its period and amplitude.
+    let mut errors = pivots();
+    errors.push(c_error_motion("C.motion.dz", 0.002, 2.0, 0.4));
+    errors.push(c_error_motion("C.motion.ex", 15e-6, 3.0, 1.1));
+    let d = run(&write_dataset_with_base(
+        "c-motions",
+        &two_positions(),
+        &errors,
+        1,
+        32,
+        None,
+    ));
+    let report = mte_diagnose::report::markdown(&d, "C error motions");
+    let mut found = names(&d);
+    found.sort();
+    assert_eq!(found, ["EAC periodic", "EZC periodic"], "{report}");
+    for (name, period, amplitude) in [
+        ("EZC periodic", 180.0, 0.002),
+        ("EAC periodic", 120.0, 15e-6),
+    ] {
+        let f = d.findings.iter().find(|f| f.name == name).expect(&report);
+        let mte_diagnose::Family::Periodic { period: p } = f.family else {
+            panic!("{name} is not periodic: {report}");
+        };
+        assert!((p.to_degrees() - period).abs() < 1e-6, "{name}: {p}");
+        let a = f
+            .estimates
+            .iter()
+            .find(|e| e.name == "amplitude")
+            .expect("an amplitude");
+        assert!(
+            (a.value - amplitude).abs() <= 2.0 * a.uncertainty,
+            "{name}: {} vs {amplitude}: {report}",
+            a.text
+        );
+    }
+    assert!(d.verdict == mte_diagnose::Verdict::Explained, "{report}");
 }
