@@ -698,9 +698,12 @@ impl BaseModelSpec {
         // A squareness not in the axis ISO 230-1 names it by (`EC0X` for `EC0Y`) comes after
         // the others: where the data see only the angle between the axes, the base keeps the
         // ISO one and lists the other as not separable.
-        let mut deferred: Vec<Term> = Vec::new();
+        let (mut deferred, mut absolute): (Vec<Term>, Vec<Term>) = (Vec::new(), Vec::new());
         for slot in slots {
-            if slot.column.iter().all(|v| v.abs() < 1e-15) || self.except.contains(&slot.name) {
+            // An exception holds in either representation (`EA0B` leaves out `EA0B abs` too).
+            let name = crate::instruments::relative_form(&slot.name).unwrap_or(&slot.name);
+            if slot.column.iter().all(|v| v.abs() < 1e-15) || self.except.iter().any(|e| e == name)
+            {
                 continue;
             }
             let constant = |family: Family| Term {
@@ -724,8 +727,14 @@ impl BaseModelSpec {
                         deferred.push(constant(Family::Base));
                     }
                 }
+                // A location error in the absolute representation after all the others: the
+                // base has it where the relative form and the next axis' do not hold it.
                 SlotRole::Constant { .. } if self.location && location.contains(&slot.name) => {
-                    out.push(constant(Family::Base))
+                    if crate::instruments::relative_form(&slot.name).is_some() {
+                        absolute.push(constant(Family::Base));
+                    } else {
+                        out.push(constant(Family::Base));
+                    }
                 }
                 SlotRole::Component { .. } => {
                     let Some(degree) = self.components.as_ref().map(|c| c.degree) else {
@@ -751,6 +760,7 @@ impl BaseModelSpec {
             }
         }
         out.append(&mut deferred);
+        out.append(&mut absolute);
         for name in &self.terms {
             if out.iter().any(|t| &t.name == name) {
                 continue;

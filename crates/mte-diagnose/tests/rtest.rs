@@ -140,7 +140,49 @@ fn write_dataset_with_base(
     seed: u64,
     base_model: Option<&str>,
 ) -> PathBuf {
-    let machine = Machine::library(MACHINE).unwrap();
+    write_dataset_on(&TRUNNION, name, balls, errors, cycles, seed, base_model)
+}
+
+/// A library machine with two rotary axes and its R-test programme: the positions in `q` of
+/// the tilting axis and of the one that turns a full turn, and the tilt at which it turns.
+struct Rig {
+    machine: &'static str,
+    tilt: usize,
+    turn: usize,
+    turn_at_tilt_deg: f64,
+}
+
+/// Seed 002's B/C trunnion: B tilts the table, C turns it at B = 0.
+const TRUNNION: Rig = Rig {
+    machine: MACHINE,
+    tilt: 3,
+    turn: 4,
+    turn_at_tilt_deg: 0.0,
+};
+
+/// Seed 000's gantry with a C–A fork head (C carries A carries the spindle): the head turns
+/// about C with A at 30° (at A = 0 the tool lies on the C line and the nest stays put).
+const FORK_HEAD: Rig = Rig {
+    machine: "seed000-ca-gantry",
+    tilt: 4,
+    turn: 3,
+    turn_at_tilt_deg: 30.0,
+};
+
+/// As [`write_dataset_with_base`] on any [`Rig`]: per setup BK1 (the tilting axis over ±90°,
+/// the other at the setup's angle) then BK2 (a full turn and back at the rig's tilt).
+#[allow(clippy::too_many_arguments)]
+fn write_dataset_on(
+    rig: &Rig,
+    name: &str,
+    balls: &[Setup],
+    errors: &[Injected],
+    cycles: usize,
+    seed: u64,
+    base_model: Option<&str>,
+) -> PathBuf {
+    let machine = Machine::library(rig.machine).unwrap();
+    let axes: Vec<String> = machine.axes().iter().map(|a| a.name.clone()).collect();
     let n_slots = machine.n_slots();
     let dir =
         std::env::temp_dir().join(format!("mte-diagnose-rtest-{name}-{}", std::process::id()));
@@ -157,12 +199,13 @@ fn write_dataset_with_base(
     };
     // The controller's linear axes put the nominal tip on the ball (the tip position is affine
     // in the linear axes once the rotary angles are fixed).
-    let command = |ball: &Vec3, b: f64, c: f64| {
+    let command = |ball: &Vec3, tilt: f64, turn: f64| {
+        let mut q = [0.0; 5];
+        (q[rig.tilt], q[rig.turn]) = (tilt, turn);
         let tip = |x: f64, y: f64, z: f64| {
-            machine
-                .tool_in_workpiece(&[x, y, z, b, c], &zero)
-                .translation
-                .vector
+            let mut at = q;
+            (at[0], at[1], at[2]) = (x, y, z);
+            machine.tool_in_workpiece(&at, &zero).translation.vector
         };
         let p0 = tip(0.0, 0.0, 0.0);
         let m = mte_linalg::Mat3::from_columns(&[
@@ -171,15 +214,20 @@ fn write_dataset_with_base(
             tip(0.0, 0.0, 1.0) - p0,
         ]);
         let lin = m.try_inverse().unwrap() * (ball - p0);
-        [lin.x, lin.y, lin.z, b, c]
+        (q[0], q[1], q[2]) = (lin.x, lin.y, lin.z);
+        q
     };
-    let mut csv = String::from("setup,test,t_s,x_mm,y_mm,z_mm,b_deg,c_deg,dx_um,dy_um,dz_um\n");
+    let mut csv = format!(
+        "setup,test,t_s,x_mm,y_mm,z_mm,{}_deg,{}_deg,dx_um,dy_um,dz_um\n",
+        axes[3].to_lowercase(),
+        axes[4].to_lowercase()
+    );
     let mut setups_json = Vec::new();
     let mut t = 0.0;
     for cycle in 0..cycles {
         for (id, ball, c_bk1) in balls {
-            // Centring at B = 0 with C at the setup's angle: the ball is put where the actual
-            // nest centre (the tool point) is, in table coordinates.
+            // Centring at no tilt with the turning axis at the setup's angle: the ball is put
+            // where the actual nest centre (the tool point) is, in table coordinates.
             let q_ref = command(ball, 0.0, c_bk1.to_radians());
             let ball_actual = machine
                 .tool_in_workpiece(&q_ref, &errors_at(t, &q_ref))
@@ -187,8 +235,17 @@ fn write_dataset_with_base(
                 .vector;
             let setup_id = format!("{id}-{cycle}");
             setups_json.push(format!(
-                r#"{{"id": "{setup_id}", "ball_mm": [{}, {}, {}], "centring": {{"X": {}, "Y": {}, "Z": {}, "B": 0.0, "C": {c_bk1}}}, "centring_t_s": {t}}}"#,
-                ball.x, ball.y, ball.z, q_ref[0], q_ref[1], q_ref[2]
+                r#"{{"id": "{setup_id}", "ball_mm": [{}, {}, {}], "centring": {{"X": {}, "Y": {}, "Z": {}, "{}": {}, "{}": {}}}, "centring_t_s": {t}}}"#,
+                ball.x,
+                ball.y,
+                ball.z,
+                q_ref[0],
+                q_ref[1],
+                q_ref[2],
+                axes[3],
+                q_ref[3].to_degrees(),
+                axes[4],
+                q_ref[4].to_degrees()
             ));
             let mut program: Vec<(&str, f64, f64)> = (0..=36)
                 .map(|k| {
@@ -199,14 +256,15 @@ fn write_dataset_with_base(
                     )
                 })
                 .collect();
-            program.extend((0..=24).map(|k| ("BK2", 0.0, (15.0 * k as f64).to_radians())));
+            let tilt = rig.turn_at_tilt_deg.to_radians();
+            program.extend((0..=24).map(|k| ("BK2", tilt, (15.0 * k as f64).to_radians())));
             program.extend(
                 (0..24)
                     .rev()
-                    .map(|k| ("BK2", 0.0, (15.0 * k as f64).to_radians())),
+                    .map(|k| ("BK2", tilt, (15.0 * k as f64).to_radians())),
             );
-            for &(test, b, c) in &program {
-                let q = command(ball, b, c);
+            for &(test, tilt, turn) in &program {
+                let q = command(ball, tilt, turn);
                 let poses = machine.branch_poses(&q, &errors_at(t, &q));
                 let reading = (poses.workpiece_in_base
                     * mte_linalg::nalgebra::Point3::from(ball_actual)
@@ -218,8 +276,8 @@ fn write_dataset_with_base(
                     q[0],
                     q[1],
                     q[2],
-                    b.to_degrees(),
-                    c.to_degrees(),
+                    q[3].to_degrees(),
+                    q[4].to_degrees(),
                     reading.x + noise.sample(&mut rng),
                     reading.y + noise.sample(&mut rng),
                     reading.z + noise.sample(&mut rng)
@@ -233,7 +291,9 @@ fn write_dataset_with_base(
         .map(|b| format!(r#", "base_model": {b}"#))
         .unwrap_or_default();
     let manifest = format!(
-        r#"{{"format": "mte-rtest/1", "machine": "{MACHINE}", "instrument": "R-test, simulated", "csv": "rtest.csv", "axes": ["X", "Y", "Z", "B", "C"], "setups": [{}]{base}}}"#,
+        r#"{{"format": "mte-rtest/1", "machine": "{}", "instrument": "R-test, simulated", "csv": "rtest.csv", "axes": {:?}, "setups": [{}]{base}}}"#,
+        rig.machine,
+        axes,
         setups_json.join(", ")
     );
     let path = dir.join("manifest.json");
@@ -307,8 +367,9 @@ fn default_base_has_the_orientation_location_errors() {
     // (nothing separates it), its turn about itself B's angular zero (an angle reference
     // does), an absolute location the relative one read with C's (the same constant).
     let entry = |name: &str| {
-        d.not_separable
+        d.base_not_separable
             .iter()
+            .chain(&d.not_separable)
             .find(|n| n.name == name)
             .unwrap_or_else(|| panic!("{name} not listed: {:?}", d.not_separable))
     };
@@ -579,4 +640,49 @@ fn error_motions_of_the_c_table_over_a_turn_are_named_against_the_location_model
         );
     }
     assert!(d.verdict == mte_diagnose::Verdict::Explained, "{report}");
+}
+
+#[test]
+fn a_fork_head_s_tool_off_the_c_line_is_a_location_error_of_the_default_base() {
+    // A C–A fork head: C tilted about X, the A line tilted about Y and Z and off its place
+    // against the tool in Z, and the tool off the C line along A's line by 12 µm (the spindle's
+    // place in the head). The C line's place relative to what it carries is invisible (the
+    // whole head moving with it is the centring's), the tool off it is not: the default base has
+    // it as the C line's absolute location and explains the data.
+    let mut errors = vec![
+        constant("C.position.ex", 25e-6),
+        constant("A.position.ey", 40e-6),
+        constant("A.position.ez", -30e-6),
+        constant("A.position.dz", 0.015),
+        constant("spindle.position.dz", -0.015),
+        constant("spindle.position.dx", 0.012),
+    ];
+    errors.push(constant("C.position.ey", -20e-6));
+    let d = run(&write_dataset_on(
+        &FORK_HEAD,
+        "fork-head",
+        &two_positions(),
+        &errors,
+        1,
+        33,
+        None,
+    ));
+    let report = mte_diagnose::report::markdown(&d, "fork head");
+    assert!(d.no_discrepancy(), "{report}");
+    let estimate = |term: &str| {
+        d.base_parameters
+            .iter()
+            .find(|p| p.term == term)
+            .map(|p| p.estimates[0].clone())
+            .unwrap_or_else(|| panic!("{term} not in the base: {report}"))
+    };
+    // The C line 12 µm off the tool the other way, the A line 15 µm off it in Z.
+    for (term, truth) in [("EX0C abs", -0.012), ("EZ0A", 0.015), ("EA0C", 25e-6)] {
+        let e = estimate(term);
+        assert!(
+            (e.value - truth).abs() <= 2.0 * e.uncertainty,
+            "{term}: {} vs {truth}: {report}",
+            e.text
+        );
+    }
 }

@@ -485,20 +485,26 @@ pub(crate) fn read_times(table: &Table) -> Result<Option<Vec<f64>>> {
 
 /// The location errors of every rotary axis (ISO 230-7) across its line: the position of the
 /// line in the two directions across the axis and its orientation about them (EX0B, EZ0B, EA0B,
-/// EC0B for a B axis along Y). Errors along and about the axis' own direction are a shift along
-/// the line and the angular zero, which these instruments see as setup errors.
+/// EC0B for a B axis along Y), then the same in the absolute representation (`EX0C abs`: the
+/// line off its place under what it carries, which keeps its own). The engine keeps the first
+/// of those the setups separate: on a table the relative form, the absolute one being a
+/// combination of it and the next axis'; on a fork head (C carrying A carrying the tool) the
+/// relative form of C moves the whole head, tool included, which no reading against the
+/// centring sees, and the absolute one is the tool off the C line. Errors along and about the
+/// axis' own direction are a shift along the line and the angular zero, which these
+/// instruments see as setup errors.
 pub(crate) fn location_names(machine: &Machine) -> Vec<String> {
     let mut names = Vec::new();
     for axis in machine.axes().iter().filter(|a| a.kind == AxisKind::Rotary) {
         let own = (0..3).find(|&k| (axis.direction[k].abs() - 1.0).abs() < 1e-9);
-        for k in 0..6 {
-            if Some(k % 3) != own {
-                names.push(catalogue::location_error_name(
-                    Component::ALL[k],
-                    &axis.name,
-                ));
-            }
+        for k in (0..6).filter(|&k| Some(k % 3) != own) {
+            names.push(catalogue::location_error_name(
+                Component::ALL[k],
+                &axis.name,
+            ));
         }
     }
+    let absolute: Vec<String> = names.iter().map(|n| format!("{n}{ABSOLUTE}")).collect();
+    names.extend(absolute);
     names
 }
