@@ -581,7 +581,7 @@ pub fn diagnose(
     };
     // The base's fit on all observations is the search's start unless the record is thinned.
     // The candidates' variants do not depend on the base: built meanwhile.
-    let ((base, base_not_separable, full_fit), built) = rayon::join(
+    let ((base, (base_not_separable, left_out), full_fit), built) = rayon::join(
         || separable_base(base, &obs.values, &w, thinned.is_none()),
         || Pool::variants_of(obs_s, candidates_s),
     );
@@ -645,6 +645,7 @@ pub fn diagnose(
                 obs,
                 &base,
                 base_not_separable,
+                &left_out,
                 candidates,
                 params,
                 &w,
@@ -672,6 +673,7 @@ fn conclude(
     obs: &Observations,
     base: &[Term],
     base_not_separable: Vec<NotSeparable>,
+    left_out: &[Term],
     candidates: &[Box<dyn Candidate>],
     params: &DiagnoseParams,
     w: &DVec,
@@ -1216,7 +1218,7 @@ fn conclude(
     let covered: Vec<String> = drifts.iter().flat_map(|c| c.findings.clone()).collect();
     compound.extend(drifts);
     compound.extend(drift_shapes(
-        obs, candidates, &chosen, &terms, &fit, &covered,
+        obs, candidates, &chosen, &terms, left_out, &fit, &covered,
     ));
     notes.extend(ambiguity_notes);
     notes.extend(unsettled);
@@ -4122,6 +4124,7 @@ fn drift_shapes(
     candidates: &[Box<dyn Candidate>],
     chosen: &[Chosen],
     terms: &[Term],
+    left_out: &[Term],
     fit: &Projector,
     covered: &[String],
 ) -> Vec<Compound> {
@@ -4142,12 +4145,13 @@ fn drift_shapes(
         .filter_map(|d| {
             // The drifting terms (an expansion about a point drifts the scale and the zero): in
             // the model, or a combination of model terms (an absolute location error when the
-            // relative ones are in the base).
+            // relative ones are in the base: a candidate, or a base term left out as such).
             let (stems, constants): (Vec<&str>, Vec<DVec>) =
                 crate::candidate::drifted_parameters(d)
                     .into_iter()
                     .filter_map(|stem| {
-                        let constant = match terms.iter().find(|t| t.name == stem) {
+                        let constant = match terms.iter().chain(left_out).find(|t| t.name == stem)
+                        {
                             Some(t) => t.columns.column(0).into_owned(),
                             None => library_constant(candidates, obs, stem)?,
                         };
@@ -4919,14 +4923,15 @@ fn keep_columns(t: Term, keep: &[usize]) -> Term {
 /// The base terms the data can separate: columns are kept in order while each adds a direction
 /// (whitened, at least [`SEPARABILITY_TOLERANCE`] of its norm outside the kept ones); a term that
 /// loses some columns keeps the others. The dropped ones are reported with what they are
-/// confounded with. Also returns the fit of `y` by the kept terms when `want_fit` (it is made
-/// anyway when a column is dropped, to say what it is confounded with).
+/// confounded with, beside the terms left out whole. Also returns the fit of `y` by the kept
+/// terms when `want_fit` (it is made anyway when a column is dropped, to say what it is
+/// confounded with).
 fn separable_base(
     base: Vec<Term>,
     y: &DVec,
     w: &DVec,
     want_fit: bool,
-) -> (Vec<Term>, Vec<NotSeparable>, Option<Projector>) {
+) -> (Vec<Term>, (Vec<NotSeparable>, Vec<Term>), Option<Projector>) {
     // The whitened design is Q R: its columns' angles are those of R's, so the columns are
     // separated in R's space (width², not observations × width).
     let width = base.iter().map(Term::width).sum();
@@ -4974,7 +4979,14 @@ fn separable_base(
             ns
         })
         .collect();
-    (kept, not_separable, fit)
+    // The terms left out whole (a column of a wider term that the rest holds leaves the term).
+    let left_out = base
+        .into_iter()
+        .enumerate()
+        .filter(|(k, t)| dropped.iter().filter(|(d, _)| d == k).count() == t.width())
+        .map(|(_, t)| t)
+        .collect();
+    (kept, (not_separable, left_out), fit)
 }
 
 fn quality(obs: &Observations, sol: &Solution, cv: &DVec) -> FitQuality {

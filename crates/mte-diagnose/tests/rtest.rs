@@ -686,3 +686,34 @@ fn a_fork_head_s_tool_off_the_c_line_is_a_location_error_of_the_default_base() {
         );
     }
 }
+
+#[test]
+fn a_pivot_drift_that_rises_and_falls_is_said_to_be_of_neither_form_against_the_default_base() {
+    // The B line drifts along X by 15 µm at its peak, 900 s into a record of 1 376 s, and
+    // back: no candidate has that course. Against the default base (whose absolute location
+    // errors the relative ones hold, and leave out) the one drift found, of `EX0B abs`, must
+    // carry the caveat that its course is neither linear nor a first-order settling.
+    let mut errors = pivots();
+    errors.extend(b_pivot_shift(0, |t| {
+        0.015 * (t / 900.0) * (1.0 - t / 900.0).exp()
+    }));
+    let d = run(&write_dataset_with_base(
+        "rise-fall",
+        &one_position(),
+        &errors,
+        4,
+        34,
+        None,
+    ));
+    let report = mte_diagnose::report::markdown(&d, "rise and fall");
+    assert!(
+        d.findings.iter().any(|f| f.name.starts_with("EX0B abs")),
+        "{report}"
+    );
+    assert!(
+        d.notes.iter().any(|n| n.contains(
+            "describes a drift of EX0B abs whose course is neither linear nor a first-order settling"
+        )),
+        "{report}"
+    );
+}
