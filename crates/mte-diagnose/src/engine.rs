@@ -581,7 +581,7 @@ pub fn diagnose(
     };
     // The base's fit on all observations is the search's start unless the record is thinned.
     // The candidates' variants do not depend on the base: built meanwhile.
-    let ((base, (base_not_separable, left_out), full_fit), built) = rayon::join(
+    let ((base, left_out, full_fit), built) = rayon::join(
         || separable_base(base, &obs.values, &w, thinned.is_none()),
         || Pool::variants_of(obs_s, candidates_s),
     );
@@ -644,8 +644,8 @@ pub fn diagnose(
             conclude(
                 obs,
                 &base,
-                base_not_separable,
-                &left_out,
+                left_out.not_separable,
+                &left_out.terms,
                 candidates,
                 params,
                 &w,
@@ -4931,7 +4931,7 @@ fn separable_base(
     y: &DVec,
     w: &DVec,
     want_fit: bool,
-) -> (Vec<Term>, (Vec<NotSeparable>, Vec<Term>), Option<Projector>) {
+) -> (Vec<Term>, LeftOut, Option<Projector>) {
     // The whitened design is Q R: its columns' angles are those of R's, so the columns are
     // separated in R's space (width², not observations × width).
     let width = base.iter().map(Term::width).sum();
@@ -4986,7 +4986,21 @@ fn separable_base(
         .filter(|(k, t)| dropped.iter().filter(|(d, _)| d == k).count() == t.width())
         .map(|(_, t)| t)
         .collect();
-    (kept, (not_separable, left_out), fit)
+    (
+        kept,
+        LeftOut {
+            not_separable,
+            terms: left_out,
+        },
+        fit,
+    )
+}
+
+/// What [`separable_base`] leaves out of the base: each dropped column with what it is
+/// confounded with, and the terms left out whole.
+struct LeftOut {
+    not_separable: Vec<NotSeparable>,
+    terms: Vec<Term>,
 }
 
 fn quality(obs: &Observations, sol: &Solution, cv: &DVec) -> FitQuality {
