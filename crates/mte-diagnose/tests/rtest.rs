@@ -1,4 +1,5 @@
-//! Hidden effects in ISO 10791-6 R-test data on the seed 002 B/C trunnion machine.
+//! Hidden effects in ISO 10791-6 R-test data on the seed 002 B/C trunnion machine (and on seed
+//! 000's C–A fork head).
 //!
 //! The generator simulates the measurement with the exact kinematics (full transforms) and
 //! writes CSV + manifest; the diagnosis reads only those files (first-order model, its own
