@@ -49,8 +49,11 @@ fn axis_line_and_x_scale_from_points_with_a_calibrated_target() {
             "seed {seed}: σ0 = {} with the true model",
             d.base.sigma0
         );
+        // Every location error is separable; only their absolute forms, which on a table are
+        // the relative ones read with the instrument's pose, are left out.
         assert!(
-            d.base_not_separable.is_empty(),
+            d.base_not_separable.iter().all(|n| n.name.ends_with(" abs")
+                && n.confounded_with.contains(&n.name[..4].to_string())),
             "{:?}",
             d.base_not_separable
         );
