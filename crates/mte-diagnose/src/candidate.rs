@@ -701,7 +701,8 @@ impl BaseModelSpec {
         let (mut deferred, mut absolute): (Vec<Term>, Vec<Term>) = (Vec::new(), Vec::new());
         for slot in slots {
             // An exception holds in either representation (`EA0B` leaves out `EA0B abs` too).
-            let name = crate::instruments::relative_form(&slot.name).unwrap_or(&slot.name);
+            let relative = crate::instruments::relative_form(&slot.name);
+            let name = relative.unwrap_or(&slot.name);
             if slot.column.iter().all(|v| v.abs() < 1e-15) || self.except.iter().any(|e| e == name)
             {
                 continue;
@@ -730,7 +731,7 @@ impl BaseModelSpec {
                 // A location error in the absolute representation after all the others: the
                 // base has it where the relative form and the next axis' do not hold it.
                 SlotRole::Constant { .. } if self.location && location.contains(&slot.name) => {
-                    if crate::instruments::relative_form(&slot.name).is_some() {
+                    if relative.is_some() {
                         absolute.push(constant(Family::Base));
                     } else {
                         out.push(constant(Family::Base));
