@@ -702,7 +702,7 @@ pub fn estimate_matches(effect: &TrueEffect, finding: &FoundEffect, k: f64) -> b
     }
 }
 
-/// For a drift with a known change over the record ([`TrueEffect::record_change`]): whether the
+/// For a drift with a known change over the record ([`TrueDrift::record_change`]): whether the
 /// diagnosis' change over the measured time lies within `k` standard uncertainties of it — the
 /// finding's first (an expansion about a point states its scale's, then its zero's), or that
 /// parameter's change by the group of findings the diagnosis says are one drift of it when
@@ -713,7 +713,7 @@ pub fn change_matches(
     outcome: &Outcome,
     k: f64,
 ) -> Option<bool> {
-    let truth = effect.record_change?;
+    let truth = effect.drift?.record_change;
     let own = finding
         .estimates
         .iter()
@@ -959,25 +959,31 @@ pub fn stated_out_of_reach(effect: &TrueEffect, o: &Outcome) -> bool {
 /// Whether the report says the effect is too small for these data: a cause of the library that
 /// would name it is listed as not separable from the model, or those that would name it have
 /// detection limits ([`mte_diagnose::DetectionLimit`]) and at the effect's period (where it has
-/// one; else at the variant the data are most sensitive to) each is above the effect's size or
-/// not separable from the model. A first-order drift's size (its asymptote) is compared with the
-/// first-order candidates' limits only.
+/// one, at its time constant where it is a first-order drift, else at the variant the data are
+/// most sensitive to) each is above the effect's size or not separable from the model. A
+/// first-order drift's size (its asymptote) is compared with the first-order candidates' limits
+/// only.
 pub fn stated_below_limit(effect: &TrueEffect, o: &Outcome) -> bool {
     if o.not_separable.iter().any(|n| names_effect(effect, n)) {
         return true;
     }
     // A first-order drift's size is its asymptote, which the limits of the first-order
-    // candidates state (a linear drift's limit is a rate).
+    // candidates state at each time constant (a linear drift's limit is a rate).
     let mut limits = o
         .detection_limits
         .iter()
         .filter(|l| names_effect(effect, &l.name))
-        .filter(|l| effect.record_change.is_none() || l.name.ends_with(" exp"))
+        .filter(|l| effect.drift.is_none() || l.name.ends_with(" exp"))
         .peekable();
     limits.peek().is_some()
         && limits.all(|l| {
-            let size = match &effect.period {
-                Some((_, p)) => l.near(*p),
+            let at = match (&effect.period, effect.drift) {
+                (Some((_, p)), _) => Some(*p),
+                (None, Some(d)) => Some(d.tau_s),
+                (None, None) => None,
+            };
+            let size = match at {
+                Some(at) => l.near(at),
                 None => l.smallest().map(|s| s.1),
             };
             size.is_none_or(|s| effect.value.abs() < s)
@@ -1498,8 +1504,8 @@ step whose aliases hide it: `Diagnosis::periodic_reach`; a tracker dataset on a 
 positions cannot show a 5–40 mm pitch, one on scattered targets can); *else stated below \
 detection limit*: none of these, and the report's table of what the data could have shown \
 (`Diagnosis::detection_limits`: for each cause not found, the size the search would find 80 \
-times in 100) gives, for every cause that would name the effect, at the effect's period, a size \
-above the effect's or says that period is not separable from the model, or the report lists \
+times in 100) gives, for every cause that would name the effect, at the effect's period or a \
+first-order drift's time constant (the tested one nearest it), a size above the effect's or says that period is not separable from the model, or the report lists \
 such a cause as not separable \
 (`xtask::studies::stated_below_limit`) — a miss the report owns up to; *within 2 u*: \
 of those named right, |estimate − truth| ≤ 2 u (the `amplitude` estimate or the first; \

@@ -764,7 +764,15 @@ fn conclude(
     };
     let mut not_separable = search.not_separable;
     let mut rests_on_orders: Vec<String> = Vec::new();
+    let mut exchanged = search.exchanged;
+    let span = obs.variable_of_kind(VariableKind::Time).map(|t| {
+        let (lo, hi) = crate::basis::range(&t.values);
+        hi - lo
+    });
     let (terms, x, sol, fit, extended, cov, hyper_rows, extended_parameters) = loop {
+        if let Some(span) = span {
+            exchanged.extend(first_order_courses(&searcher, &mut chosen, &base_fit, span));
+        }
         let terms: Vec<Term> = searcher.with(&chosen, None).into_iter().cloned().collect();
         let (x, fit) = searcher.fit_of(&base_fit, &terms.iter().collect::<Vec<_>>());
         let sol = solve(&x, &obs.values, w);
@@ -958,9 +966,7 @@ fn conclude(
     // A first-order drift's final value lies beyond the record, through a time constant the
     // data may bound on one side only: its 95 % interval by profile likelihood.
     let mut unsettled = Vec::new();
-    if let Some(t) = obs.variable_of_kind(VariableKind::Time) {
-        let span = crate::basis::range(&t.values);
-        let span = span.1 - span.0;
+    if let Some(span) = span {
         let yw = obs.values.component_mul(w);
         let scale = covariance_scale(obs, extended.sigma0);
         for (k, c) in chosen.iter().enumerate() {
@@ -1254,7 +1260,7 @@ fn conclude(
         steps: search.steps,
         findings,
         compound,
-        exchanged: search.exchanged,
+        exchanged,
         pruned,
         not_separable,
         detection_limits: search.detection_limits,
@@ -3975,14 +3981,7 @@ fn unsettled_note(
     profile: impl Fn(&Drifting<'_>) -> Option<(Interval, Vec<Interval>)>,
 ) -> Option<String> {
     let stem = c.term.name.strip_suffix(" drift")?;
-    // Its first-order twin: the candidate that builds on the same term, named so.
-    let required = candidates.get(c.candidate)?.requires();
-    let twin = format!("{stem} drift exp");
-    let sibling = candidates
-        .iter()
-        .filter(|k| k.requires() == required)
-        .find(|k| k.at(0, span).is_some_and(|t| t.name == twin))?
-        .as_ref();
+    let sibling = candidates[first_order_twin(candidates, c, span)?].as_ref();
     let q = accumulated(c.term.coefficients.first()?.1);
     let (tau, values) = profile(&Drifting {
         candidate: sibling,
@@ -4002,6 +4001,75 @@ fn unsettled_note(
             ""
         }
     ))
+}
+
+/// The first-order twin of the linear drift `c` (`span`: the record's, s): the candidate that
+/// builds on the same term as `c`'s, named `"{stem} drift exp"`.
+fn first_order_twin(candidates: &[Box<dyn Candidate>], c: &Chosen, span: f64) -> Option<usize> {
+    let stem = c.term.name.strip_suffix(" drift")?;
+    let required = candidates.get(c.candidate)?.requires();
+    let twin = format!("{stem} drift exp");
+    candidates
+        .iter()
+        .position(|k| k.requires() == required && k.at(0, span).is_some_and(|t| t.name == twin))
+}
+
+/// Linear drifts whose course the data say is first-order: the first-order drift of the same
+/// parameter ([`first_order_twin`]) in its place, its time constant chosen over its grid and
+/// refined with the rest of the model fitted, leaves the model's χ² lower by more than
+/// [`EXCHANGE_CHI2`] (in the model's residual variance). The search's exchange offers that
+/// rival too, but while a first-order drift of the same displacement that entered later is still
+/// in the model beside it; once the final model lets that one go (its size undetermined beside
+/// the linear one, the two being nearly one column), the linear drift is left to carry a course
+/// it does not have. Each such drift takes its first-order form in `chosen` (`span`: the
+/// record's, s); returns the exchanges.
+fn first_order_courses(
+    searcher: &Searcher<'_>,
+    chosen: &mut Vec<Chosen>,
+    base_fit: &Projector,
+    span: f64,
+) -> Vec<Exchange> {
+    let mut exchanged = Vec::new();
+    let (_, fit) = searcher.fit_of(base_fit, &searcher.with(chosen, None));
+    let variance = fit.rss_w() / fit.dof().max(1) as f64;
+    let mut rss = fit.rss_w();
+    for k in 0..chosen.len() {
+        if !matches!(
+            chosen[k].term.family,
+            Family::Drift {
+                time_constant_s: None
+            }
+        ) {
+            continue;
+        }
+        let Some(twin) = first_order_twin(searcher.candidates, &chosen[k], span) else {
+            continue;
+        };
+        let Some(term) = searcher.candidates[twin].at(0, span) else {
+            continue;
+        };
+        let mut trial = chosen.clone();
+        (
+            trial[k].term,
+            trial[k].candidate,
+            trial[k].variant,
+            trial[k].component,
+        ) = (term, twin, 0, 0);
+        searcher.rechoose(&mut trial, k, base_fit);
+        let (_, trial_fit) = searcher.fit_of(base_fit, &searcher.with(&trial, None));
+        if trial_fit.rss_w() < rss - EXCHANGE_CHI2 * variance {
+            let by = trial[k].term.name.clone();
+            trial[k].alternatives.retain(|a| *a != by);
+            exchanged.push(Exchange {
+                replaced: chosen[k].term.name.clone(),
+                by,
+                chi2_drop: (rss - trial_fit.rss_w()) / variance,
+            });
+            rss = trial_fit.rss_w();
+            *chosen = trial;
+        }
+    }
+    exchanged
 }
 
 /// A first-order drift to profile ([`settling_intervals`]): a candidate's variant (and the

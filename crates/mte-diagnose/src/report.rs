@@ -125,8 +125,19 @@ pub fn markdown(d: &Diagnosis, title: &str) -> String {
                 level(d.quantity, q.rms)
             );
         }
+        // Within the tolerance the verdict allows, a χ² test that rejects is said in words: the
+        // scatter is above the stated noise by more than chance, and what could hide in it is
+        // what the detection limits state.
+        let excess = match q.chi2_p_value {
+            Some(p) if p < d.alpha && q.sigma0 > 1.0 => format!(
+                ": the scatter is {:.2} × the stated noise, more than chance gives, within the {}× to which a stated noise is usually known (a cause smaller than what these data could have shown, listed below, may hide in it)",
+                q.sigma0,
+                crate::engine::STATED_NOISE_TOLERANCE
+            ),
+            _ => String::new(),
+        };
         format!(
-            "σ0 = {:.2}{}",
+            "σ0 = {:.2}{}{excess}",
             q.sigma0,
             q.chi2_p_value
                 .map(|p| format!(", χ² test {}", p_text(p)))

@@ -11,7 +11,8 @@ use rand_distr::{Distribution, Normal};
 
 use super::smooth::{Smooth, signed};
 use super::{
-    EffectKind, Hidden, Kind, Spec, TrueEffect, Truth, sawtooth, unsupported, write_manifest,
+    EffectKind, Hidden, Kind, Spec, TrueDrift, TrueEffect, Truth, sawtooth, unsupported,
+    write_manifest,
 };
 
 /// The stated noise a user writes: the true σ rounded to 0.1 µm (at least 0.1 µm; for a rotary
@@ -138,7 +139,7 @@ pub(crate) fn write(spec: &Spec, rng: &mut ChaCha8Rng, dir: &Path) -> std::io::R
             signed: true,
             period: None,
             detail: "ordinary reversal".into(),
-            record_change: None,
+            drift: None,
         });
     }
     let mut reversal_um = ordinary_reversal_um;
@@ -163,7 +164,7 @@ pub(crate) fn write(spec: &Spec, rng: &mut ChaCha8Rng, dir: &Path) -> std::io::R
                     signed: false,
                     period: Some(("X".into(), period_mm)),
                     detail: format!("period {period_mm:.2} mm"),
-                    record_change: None,
+                    drift: None,
                 });
             }
             Hidden::Reversal { um } => {
@@ -177,7 +178,7 @@ pub(crate) fn write(spec: &Spec, rng: &mut ChaCha8Rng, dir: &Path) -> std::io::R
                     signed: true,
                     period: None,
                     detail: String::new(),
-                    record_change: None,
+                    drift: None,
                 });
             }
             Hidden::ReversalGrowing { um } => {
@@ -194,7 +195,7 @@ pub(crate) fn write(spec: &Spec, rng: &mut ChaCha8Rng, dir: &Path) -> std::io::R
                     signed: true,
                     period: None,
                     detail: format!("growing along X to {um:.2} µm at its end"),
-                    record_change: None,
+                    drift: None,
                 });
             }
             Hidden::ZeroDrift { um_per_min } => {
@@ -208,7 +209,7 @@ pub(crate) fn write(spec: &Spec, rng: &mut ChaCha8Rng, dir: &Path) -> std::io::R
                     signed: true,
                     period: None,
                     detail: "linear drift of the zero".into(),
-                    record_change: None,
+                    drift: None,
                 });
             }
             Hidden::ScaleDrift { ppm, tau_s, fixed } => {
@@ -226,7 +227,10 @@ pub(crate) fn write(spec: &Spec, rng: &mut ChaCha8Rng, dir: &Path) -> std::io::R
                     signed: true,
                     period: None,
                     detail: format!("thermal expansion about X = {x0:.0} mm, τ = {tau_s:.0} s"),
-                    record_change: Some(ppm * 1e-6 * (1.0 - (-t_last / tau_s).exp())),
+                    drift: Some(TrueDrift {
+                        record_change: ppm * 1e-6 * (1.0 - (-t_last / tau_s).exp()),
+                        tau_s,
+                    }),
                 });
             }
             Hidden::Sawtooth {
@@ -247,7 +251,7 @@ pub(crate) fn write(spec: &Spec, rng: &mut ChaCha8Rng, dir: &Path) -> std::io::R
                     signed: false,
                     period: Some(("X".into(), period_mm)),
                     detail: format!("sawtooth, period {period_mm:.2} mm"),
-                    record_change: None,
+                    drift: None,
                 });
             }
             Hidden::RiseFall { um, peak } => {
@@ -264,7 +268,7 @@ pub(crate) fn write(spec: &Spec, rng: &mut ChaCha8Rng, dir: &Path) -> std::io::R
                     signed: true,
                     period: None,
                     detail: format!("rise and fall of the zero, peak at {tau_s:.0} s"),
-                    record_change: None,
+                    drift: None,
                 });
             }
             _ => return Err(unsupported(Kind::Axis, h)),

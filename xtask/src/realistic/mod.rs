@@ -271,10 +271,19 @@ pub struct TrueEffect {
     /// For an effect that repeats along an axis: the axis and the period (mm, or rad for a
     /// rotary axis).
     pub period: Option<(String, f64)>,
-    /// For a drift: the change of its parameter from the first reading to the last, in the
-    /// units of `value` (what the data show of a first-order drift whatever form it is found
-    /// in).
-    pub record_change: Option<f64>,
+    /// For a first-order drift: its course over the record.
+    pub drift: Option<TrueDrift>,
+}
+
+/// The course of a first-order drift over the record.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct TrueDrift {
+    /// The change of its parameter from the first reading to the last, in the units of
+    /// [`TrueEffect::value`] (what the data show of a first-order drift whatever form it is
+    /// found in).
+    pub record_change: f64,
+    /// Its time constant, s.
+    pub tau_s: f64,
 }
 
 /// What the generator put into a dataset (kept in memory, never written).
@@ -435,7 +444,7 @@ pub(crate) fn squareness_truth(pair: usize, urad: f64, total_rad: f64) -> TrueEf
         signed: false,
         period: None,
         detail: String::new(),
-        record_change: None,
+        drift: None,
     }
 }
 
@@ -463,7 +472,7 @@ pub(crate) fn angular_positioning(
         signed: false,
         period: Some((["B", "C"][rotary].into(), TAU / k)),
         detail: format!("harmonic {harmonic} of a turn"),
-        record_change: None,
+        drift: None,
     };
     ((urad * 1e-6, k, phase), truth)
 }
@@ -489,7 +498,7 @@ pub(crate) fn two_axis(
         signed: false,
         period: None,
         detail: "Y positioning error changing along X".into(),
-        record_change: None,
+        drift: None,
     };
     (effect, truth)
 }

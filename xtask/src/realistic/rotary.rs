@@ -77,7 +77,7 @@ pub(crate) fn write(spec: &Spec, rng: &mut ChaCha8Rng, dir: &Path) -> std::io::R
                     signed: true,
                     period: None,
                     detail: String::new(),
-                    record_change: None,
+                    drift: None,
                 });
             }
             _ => return Err(unsupported(Kind::Rotary, h)),

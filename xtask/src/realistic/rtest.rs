@@ -25,7 +25,9 @@ use rand_distr::{Distribution, Normal};
 
 use super::geom::{ComponentSizes, Iso, LinearErrors, V3, rot_x, rot_y, rot_z, trans};
 use super::smooth::{Periodic, Waviness, signed};
-use super::{EffectKind, Hidden, Kind, Spec, TrueEffect, Truth, unsupported, write_manifest};
+use super::{
+    EffectKind, Hidden, Kind, Spec, TrueDrift, TrueEffect, Truth, unsupported, write_manifest,
+};
 
 /// A function of time for a location error, mm.
 #[derive(Debug, Clone, Copy)]
@@ -369,7 +371,7 @@ fn first_order(
         signed: true,
         period: None,
         detail: format!("{what}, τ = {tau_s:.0} s"),
-        record_change: None,
+        drift: None,
     }
 }
 
@@ -450,7 +452,7 @@ pub(crate) fn write(spec: &Spec, rng: &mut ChaCha8Rng, dir: &Path) -> std::io::R
                         "rise and fall, peak at {:.0} % of the measuring time",
                         100.0 * peak
                     ),
-                    record_change: None,
+                    drift: None,
                 });
             }
             Hidden::AngularPositioning {
@@ -481,7 +483,7 @@ pub(crate) fn write(spec: &Spec, rng: &mut ChaCha8Rng, dir: &Path) -> std::io::R
                     signed: true,
                     period: None,
                     detail: String::new(),
-                    record_change: None,
+                    drift: None,
                 });
             }
             Hidden::Squareness { pair, urad } if pair < 3 => {
@@ -517,7 +519,7 @@ pub(crate) fn write(spec: &Spec, rng: &mut ChaCha8Rng, dir: &Path) -> std::io::R
         signed: true,
         period: None,
         detail: "ordinary (+ hidden)".into(),
-        record_change: None,
+        drift: None,
     })
     .collect();
 
@@ -610,7 +612,10 @@ pub(crate) fn write(spec: &Spec, rng: &mut ChaCha8Rng, dir: &Path) -> std::io::R
     // (One true effect per hidden one, in order: any other is refused above.)
     for (e, h) in effects.iter_mut().zip(&spec.hidden) {
         if let Hidden::PivotDrift { um, tau_s, .. } | Hidden::SpindleDrift { um, tau_s, .. } = *h {
-            e.record_change = Some(um * 1e-3 * (1.0 - (-t_last / tau_s).exp()));
+            e.drift = Some(TrueDrift {
+                record_change: um * 1e-3 * (1.0 - (-t_last / tau_s).exp()),
+                tau_s,
+            });
         }
     }
     std::fs::write(dir.join("rtest.csv"), csv)?;

@@ -341,7 +341,7 @@ pub(crate) fn write(spec: &Spec, rng: &mut ChaCha8Rng, dir: &Path) -> std::io::R
                         "{} period {period_mm:.2} mm",
                         if saw { "sawtooth" } else { "sine" }
                     ),
-                    record_change: None,
+                    drift: None,
                 });
             }
             Hidden::Squareness { pair, urad } if pair < 3 => {
@@ -360,7 +360,7 @@ pub(crate) fn write(spec: &Spec, rng: &mut ChaCha8Rng, dir: &Path) -> std::io::R
                     signed: true,
                     period: None,
                     detail: String::new(),
-                    record_change: None,
+                    drift: None,
                 });
             }
             Hidden::TwoAxis { um } => {
@@ -407,7 +407,7 @@ pub(crate) fn write(spec: &Spec, rng: &mut ChaCha8Rng, dir: &Path) -> std::io::R
             signed: false,
             period: None,
             detail: "ordinary + hidden, between the axes' reference lines".into(),
-            record_change: None,
+            drift: None,
         })
         .collect();
 
