@@ -125,32 +125,38 @@ pub fn markdown(d: &Diagnosis, title: &str) -> String {
                 level(d.quantity, q.rms)
             );
         }
-        // Within the tolerance the verdict allows, a χ² test that rejects is said in words: the
-        // scatter is above the stated noise by more than chance, and what could hide in it is
-        // what the detection limits state.
-        let excess = match q.chi2_p_value {
-            Some(p) if p < d.alpha && q.sigma0 > 1.0 => format!(
-                ": the scatter is {:.2} × the stated noise, more than chance gives, within the {}× to which a stated noise is usually known (a cause smaller than what these data could have shown, listed below, may hide in it)",
-                q.sigma0,
-                crate::engine::STATED_NOISE_TOLERANCE
-            ),
-            _ => String::new(),
-        };
         format!(
-            "σ0 = {:.2}{}{excess}",
+            "σ0 = {:.2}{}",
             q.sigma0,
             q.chi2_p_value
                 .map(|p| format!(", χ² test {}", p_text(p)))
                 .unwrap_or_default()
         )
     };
+    // Within the tolerance the verdict allows, a χ² test that rejects is said in words: the
+    // scatter is above the stated noise by more than chance, and what could hide in it is what
+    // the detection limits state.
+    let excess = |q: &crate::engine::FitQuality| match q.chi2_p_value {
+        Some(p) if stated && p < d.alpha && q.sigma0 > 1.0 => format!(
+            " The scatter is {:.2} × the stated noise: more than chance gives, within the factor {} to which a stated noise is usually known; {} may hide in it.",
+            q.sigma0,
+            crate::engine::STATED_NOISE_TOLERANCE,
+            if d.detection_limits.is_empty() {
+                "a cause too small for the search to find"
+            } else {
+                "a cause smaller than what these data could have shown (listed below)"
+            }
+        ),
+        _ => String::new(),
+    };
     match d.verdict {
         Verdict::NoDiscrepancy if stated => {
             let _ = writeln!(
                 s,
-                "**No significant discrepancy.** The base model explains the data to the noise: residual RMS {}, {}.\n",
+                "**No significant discrepancy.** The base model explains the data to the noise: residual RMS {}, {}.{}\n",
                 level(d.quantity, d.base.rms),
-                noise_fit(&d.base)
+                noise_fit(&d.base),
+                excess(&d.base)
             );
         }
         Verdict::NoDiscrepancy => {
@@ -168,7 +174,7 @@ pub fn markdown(d: &Diagnosis, title: &str) -> String {
                 .count();
             let _ = writeln!(
                 s,
-                "**The base model misses {} cause{}**, named below{}; with {} the residuals are {} ({}).\n",
+                "**The base model misses {} cause{}**, named below{}; with {} the residuals are {} ({}).{}\n",
                 d.findings.len(),
                 if d.findings.len() == 1 { "" } else { "s" },
                 match (qualified, d.findings.len()) {
@@ -182,7 +188,8 @@ pub fn markdown(d: &Diagnosis, title: &str) -> String {
                 } else {
                     "left without structure"
                 },
-                noise_fit(&d.extended)
+                noise_fit(&d.extended),
+                excess(&d.extended)
             );
         }
         Verdict::Unexplained => {
