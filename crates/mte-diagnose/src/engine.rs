@@ -765,10 +765,7 @@ fn conclude(
     let mut not_separable = search.not_separable;
     let mut rests_on_orders: Vec<String> = Vec::new();
     let mut exchanged = search.exchanged;
-    let span = obs.variable_of_kind(VariableKind::Time).map(|t| {
-        let (lo, hi) = crate::basis::range(&t.values);
-        hi - lo
-    });
+    let span = record_span(obs);
     let (terms, x, sol, fit, extended, cov, hyper_rows, extended_parameters) = loop {
         if let Some(span) = span {
             exchanged.extend(first_order_courses(&searcher, &mut chosen, &base_fit, span));
@@ -3218,8 +3215,12 @@ impl Searcher<'_> {
                     base: &completed,
                     ..*self
                 };
-                // As the final model does, the causes that rest on the base's orders alone leave.
+                // As the final model does, a linear drift takes its first-order course where the
+                // data say so, and the causes that rest on the base's orders alone leave.
                 let mut chosen = found.chosen;
+                if let Some(span) = record_span(obs) {
+                    first_order_courses(&searcher, &mut chosen, &completed_fit, span);
+                }
                 let x_base = design(&completed.iter().collect::<Vec<_>>(), n);
                 let (x, fit) = searcher.drop_resting_on_orders(&mut chosen, &completed_fit);
                 let held_out_residuals = |x: &DMat, fit: &Projector| -> Vec<f64> {
@@ -4001,6 +4002,14 @@ fn unsettled_note(
             ""
         }
     ))
+}
+
+/// The time from the first reading to the last, s (`None` without a time column).
+fn record_span(obs: &Observations) -> Option<f64> {
+    obs.variable_of_kind(VariableKind::Time).map(|t| {
+        let (lo, hi) = crate::basis::range(&t.values);
+        hi - lo
+    })
 }
 
 /// The first-order twin of the linear drift `c` (`span`: the record's, s): the candidate that
