@@ -32,7 +32,7 @@ use xtask::reproduce::{self, Freshness, PAPERS};
 
 const USAGE: &str = "usage: cargo xtask <reproduce [seed000|seed002|seed003|seed004|all] [--check] | reproduce seed003 --timing | bench [-- criterion args] | bench-diagnose [--rows N] [--seed S] | study [fdr|power|coverage|combined|openworld|all] [--n N] [--n-power M] [--seed S] [--kind axis|tracker|tracker-tools|rtest|rtest-head|points|points-targets|rotary] [--base-model omit] [--out FILE]>";
 
-/// `cargo xtask realistic <axis|tracker|tracker-tools|rtest|rtest-head|points|points-targets|rotary> <seed> <dir> [--hidden EFFECT SIZE]
+/// `cargo xtask realistic <axis|tracker|tracker-tools|rtest|rtest-head|points|points-targets|rotary|c-stage> <seed> <dir> [--hidden EFFECT SIZE]
 /// [--cycles N] [--targets N]`: writes one realistic dataset (every ordinary error) for trying
 /// `mte diagnose` or timing it; clean unless `--hidden` names a study effect (`pitch`,
 /// `sawtooth`, `risefall`, … in the unit of the studies' tables; its other parameters drawn
@@ -42,10 +42,12 @@ const USAGE: &str = "usage: cargo xtask <reproduce [seed000|seed002|seed003|seed
 /// once, as the studies' combined cells do (the k-th of one family on the k-th axis), against
 /// the user's model of a real machine.
 /// `--cycles`: R-test measurement cycles; `--targets`: tracker targets (the benches' sizes:
-/// 8 cycles, 400 targets). `points` writes 3-D points of a C table with a calibrated target
-/// (the bundled `fixtures/datasets/c-stage-points/` is seed 1).
+/// 8 cycles, 400 targets). `c-stage` writes the 3-D points of a C table with a calibrated
+/// target, the C line's location errors and a scale error of X (the bundled
+/// `fixtures/datasets/c-stage-points/` is seed 1); `points` the studies' realistic ones, every
+/// ordinary error of that machine at once.
 fn run_realistic(args: &[String]) -> Result<(), String> {
-    const USAGE: &str = "usage: cargo xtask realistic <axis|tracker|tracker-tools|rtest|rtest-head|points|points-targets|rotary> <seed> <dir> [--hidden EFFECT SIZE] [--cycles N] [--targets N]";
+    const USAGE: &str = "usage: cargo xtask realistic <axis|tracker|tracker-tools|rtest|rtest-head|points|points-targets|rotary|c-stage> <seed> <dir> [--hidden EFFECT SIZE] [--cycles N] [--targets N]";
     let (positional, options) = args.split_at(args.len().min(3));
     let [kind, seed, dir] = positional else {
         return Err(USAGE.into());
@@ -76,7 +78,7 @@ fn run_realistic(args: &[String]) -> Result<(), String> {
             other => return Err(format!("option `{other}`: unknown\n{USAGE}")),
         }
     }
-    if kind == "points" {
+    if kind == "c-stage" {
         let seed: u64 = seed.parse().map_err(|e| format!("seed `{seed}`: {e}"))?;
         let truth =
             xtask::realistic::points::write_points(seed, std::path::Path::new(dir), true, None)
