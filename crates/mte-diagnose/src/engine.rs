@@ -4039,16 +4039,22 @@ fn first_order_courses(
     span: f64,
 ) -> Vec<Exchange> {
     let mut exchanged = Vec::new();
+    let linear = |c: &Chosen| {
+        matches!(
+            c.term.family,
+            Family::Drift {
+                time_constant_s: None
+            }
+        )
+    };
+    if !chosen.iter().any(linear) {
+        return exchanged;
+    }
     let (_, fit) = searcher.fit_of(base_fit, &searcher.with(chosen, None));
     let variance = fit.rss_w() / fit.dof().max(1) as f64;
     let mut rss = fit.rss_w();
     for k in 0..chosen.len() {
-        if !matches!(
-            chosen[k].term.family,
-            Family::Drift {
-                time_constant_s: None
-            }
-        ) {
+        if !linear(&chosen[k]) {
             continue;
         }
         let Some(twin) = first_order_twin(searcher.candidates, &chosen[k], span) else {
