@@ -702,7 +702,8 @@ pub fn estimate_matches(effect: &TrueEffect, finding: &FoundEffect, k: f64) -> b
     }
 }
 
-/// For a drift with a known change over the record ([`TrueDrift::record_change`]): whether the
+/// For a drift with a known change over the record
+/// ([`TrueDrift::record_change`](crate::realistic::TrueDrift::record_change)): whether the
 /// diagnosis' change over the measured time lies within `k` standard uncertainties of it — the
 /// finding's first (an expansion about a point states its scale's, then its zero's), or that
 /// parameter's change by the group of findings the diagnosis says are one drift of it when

@@ -186,6 +186,13 @@ fn a_first_order_drift_that_entered_in_linear_form_is_given_its_first_order_cour
             "{names:?}"
         );
     }
+    // Nor is a linear drift one the Z drift cannot be told from.
+    let z = d.findings.iter().find(|f| f.name.starts_with("EZ0"));
+    assert!(
+        z.is_some_and(|f| f.alternatives.iter().all(|a| !a.ends_with(" drift"))),
+        "{:?}",
+        z.map(|f| &f.alternatives)
+    );
     assert!(
         d.compound
             .iter()

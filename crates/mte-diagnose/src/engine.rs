@@ -4073,8 +4073,11 @@ fn first_order_courses(
         searcher.rechoose(&mut trial, k, base_fit);
         let (_, trial_fit) = searcher.fit_of(base_fit, &searcher.with(&trial, None));
         if trial_fit.rss_w() < rss - EXCHANGE_CHI2 * variance {
+            // The data told the forms apart: the linear drifts listed as alternatives go too.
             let by = trial[k].term.name.clone();
-            trial[k].alternatives.retain(|a| *a != by);
+            trial[k]
+                .alternatives
+                .retain(|a| *a != by && !a.ends_with(" drift"));
             exchanged.push(Exchange {
                 replaced: chosen[k].term.name.clone(),
                 by,
