@@ -2,35 +2,11 @@
 //! line and field or the flag; memory is refused with the figure before allocating; `--out` is
 //! checked first and written atomically. Each test runs the binary as a user would.
 
+use common::{root, scratch};
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-fn root() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
-}
-
-/// A fresh scratch directory for one test, removed when the test ends.
-struct Scratch(PathBuf);
-
-impl std::ops::Deref for Scratch {
-    type Target = Path;
-    fn deref(&self) -> &Path {
-        &self.0
-    }
-}
-
-impl Drop for Scratch {
-    fn drop(&mut self) {
-        let _ = std::fs::remove_dir_all(&self.0);
-    }
-}
-
-fn scratch(name: &str) -> Scratch {
-    let d = std::env::temp_dir().join(format!("mte-cli-input-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    Scratch(d)
-}
+mod common;
 
 /// Runs `mte args…` (no memory limit from the environment); (success, stderr).
 fn mte<S: AsRef<std::ffi::OsStr>>(args: &[S]) -> (bool, String) {

@@ -1,6 +1,7 @@
 //! `mte sensitivity` on a machine and an error set: the bundled fixture run end to end (small N)
 //! against the library's analytic indices, and bad problem files.
 
+use common::{root, scratch};
 use mte_errors::pose_model::{Linearisation, PoseErrorModel, diagonal_points};
 use mte_errors::{Catalogue, ErrorSet};
 use mte_kinematics::Machine;
@@ -8,17 +9,7 @@ use serde_json::Value;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-fn root() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
-}
-
-/// A fresh scratch directory for one test.
-fn scratch(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("mte-cli-sens-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
+mod common;
 
 /// The fixture with its paths made absolute and `edit` applied, written to `dir`.
 fn problem(dir: &Path, edit: impl FnOnce(&mut Value)) -> PathBuf {
@@ -189,7 +180,6 @@ fn fixture_runs_and_agrees_with_the_library() {
     assert_eq!(first["direction"], "PX");
     let v0: f64 = agg[0][first["index"].as_str().unwrap()].parse().unwrap();
     assert_eq!(first["values"][0].as_f64().unwrap(), v0);
-    let _ = std::fs::remove_dir_all(&dir);
 }
 
 #[test]
@@ -232,7 +222,6 @@ fn bad_problem_files_name_the_file_and_field() {
     expect(&p, "model.errors", "unknown error parameter `EQQ`");
     let p = set(r#"{"name": "EXX", "value_um": 1}"#);
     expect(&p, "model.errors", "no entry has a `distribution`");
-    let _ = std::fs::remove_dir_all(&dir);
 }
 
 /// A test-model problem file (inputs, model and method settings as JSON) written to `dir`.
@@ -308,7 +297,6 @@ fn pce_errors_on_the_seed003_machine_match_fresh_runs() {
             }
         }
     }
-    let _ = std::fs::remove_dir_all(&dir);
 }
 
 /// Corrected LOO after a search over 903 candidates with 200 runs (G-function, 41 inputs): the
@@ -369,7 +357,6 @@ fn corrected_loo_warns_in_the_output_and_result_json() {
         !ok && err.contains("field `pce`") && err.contains("runs"),
         "{err}"
     );
-    let _ = std::fs::remove_dir_all(&dir);
 }
 
 /// Sobol' on Ishigami, N = 1024: the number of model runs is stated, and the one index whose
@@ -409,5 +396,4 @@ fn sobol_states_its_runs_and_flags_wide_intervals() {
     let m = messages[0].as_str().unwrap();
     assert!(m.starts_with("output: S1 interval wider") && m.contains("x3") && !m.contains("x2"));
     assert!(err.contains(&format!("warning: {m}")), "{err}");
-    let _ = std::fs::remove_dir_all(&dir);
 }
