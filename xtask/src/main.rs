@@ -112,6 +112,17 @@ fn run_realistic(args: &[String]) -> Result<(), String> {
     for h in &hidden {
         outln!("hidden: {h:?}");
     }
+    // What the studies compare the diagnosis with (the machine's total where ordinary and hidden
+    // add), in the diagnosis' internal units.
+    for e in &truth.effects {
+        outln!(
+            "truth: {} = {:e}{} ({})",
+            e.iso_name_hint,
+            e.value,
+            if e.signed { "" } else { " (magnitude)" },
+            e.detail
+        );
+    }
     // (A rotary table's noise is an angle: `noise_um` holds mrad.)
     let noise = if kind == xtask::realistic::Kind::Rotary {
         format!("{:.2}″", (truth.noise_um * 1e-3).to_degrees() * 3600.0)

@@ -34,6 +34,9 @@ pub struct FoundEffect {
     pub alternatives: Vec<String>,
     /// Its period (mm along a linear axis, rad of a turn), for a periodic finding.
     pub period: Option<f64>,
+    /// For a linear drift: the 95 % interval the report states for the value a first-order
+    /// drift of the same parameter would settle to ([`mte_diagnose::FirstOrderFit`]).
+    pub first_order_final: Option<mte_diagnose::Interval>,
 }
 
 /// What the diagnosis returned for one dataset.
@@ -156,6 +159,7 @@ pub fn run_one(spec: &Spec, index: usize, seed: u64, work: &Path) -> Record {
                         .iter()
                         .map(|e| (e.name.clone(), e.value, e.uncertainty, e.interval))
                         .collect(),
+                    first_order_final: f.first_order.as_ref().map(|f| f.final_value),
                 })
                 .collect(),
             sigma0: d.extended.sigma0,
@@ -672,8 +676,10 @@ pub fn names_effect(effect: &TrueEffect, finding: &str) -> bool {
 /// estimate named `amplitude` if there is one, else the first; magnitudes are compared where the
 /// truth's sign is not defined the diagnosis's way ([`TrueEffect::signed`]). Where the report
 /// states a 95 % interval (a first-order drift's final value, beyond the record), with `k` = 2
-/// the truth must lie in it. A drift's rate (found linear) is not compared with a final value,
-/// nor a final value (found first-order) with a rate: no match.
+/// the truth must lie in it. A first-order drift found linear, whose estimate is a rate, is
+/// compared with `k` = 2 through the interval the report states for the value a first-order
+/// drift of the parameter would settle to ([`FoundEffect::first_order_final`]); a linear drift's
+/// rate is not compared with a final value (found first-order): no match.
 pub fn estimate_matches(effect: &TrueEffect, finding: &FoundEffect, k: f64) -> bool {
     let e = finding
         .estimates
@@ -683,14 +689,19 @@ pub fn estimate_matches(effect: &TrueEffect, finding: &FoundEffect, k: f64) -> b
     let Some((name, v, u, interval)) = e else {
         return false;
     };
+    let in_interval = |i: &mte_diagnose::Interval| {
+        i.contains(effect.value) || (!effect.signed && i.contains(-effect.value))
+    };
     // A rate (a linear drift's) and a final value (a first-order one's) are not compared.
-    if name.ends_with(" rate") != effect.unit.ends_with("/min") {
-        return false;
+    let truth_is_rate = effect.unit.ends_with("/min");
+    if name.ends_with(" rate") != truth_is_rate {
+        return match &finding.first_order_final {
+            Some(i) if k == 2.0 && !truth_is_rate => in_interval(i),
+            _ => false,
+        };
     }
     match interval {
-        Some(i) if k == 2.0 => {
-            i.contains(effect.value) || (!effect.signed && i.contains(-effect.value))
-        }
+        Some(i) if k == 2.0 => in_interval(i),
         _ => {
             let (v, t) = if effect.signed {
                 (*v, effect.value)
@@ -1515,8 +1526,11 @@ for B tilt and squareness the truth is the machine's total, ordinary + hidden, f
 positioning the amplitude of the machine's total at the hidden harmonic, where its ordinary \
 error motion about Z has a component too; for a first-order drift's final value, beyond the \
 record, the report states a 95 % interval by profile likelihood over the time constant, and the \
-truth must lie in it; a first-order drift found as a linear one, whose estimate is a rate, and \
-a linear one found as first-order count as outside); *drift: change over the measured time within 2 u*: \
+truth must lie in it; a first-order drift found as a linear one, whose estimate is a rate, is \
+compared through the report's statement beside it of where a first-order drift of the parameter \
+would settle (a 95 % interval of the final value by the same profile, one-sided where the drift \
+has not settled within the record), and a linear one found as first-order counts as outside); \
+*drift: change over the measured time within 2 u*: \
 for a drift, of those named right, |stated − true| ≤ 2 u for the drift's change from the first \
 reading to the last — the finding's *change over the measured time*, or, where the report says \
 that drift findings of the parameter are one drift of neither form, their change together: the \
@@ -1559,8 +1573,12 @@ R-test pivot drift \
 size is its final value, beyond the data, which the report states with its 95 % interval by \
 profile likelihood over the time constant (a slow drift's is longer above than ± 2 u: a longer \
 time constant with a larger final value fits almost as well), and *within 2 u* asks that the \
-truth lie in it; a drift slow against the record is found as a linear one, whose estimate is a \
-rate (outside under *within 2 u*). The change over the measured time, which the report states for every \
+truth lie in it. A first-order form must earn its time constant: it holds only where it leaves \
+χ² lower than the linear drift of the parameter by more than 6.63 (χ² 99 %, one degree of \
+freedom), so a drift slow against the record is found as a linear one, whose estimate is a \
+rate; the report then states beside it where a first-order drift would settle (95 %, by the \
+same profile, mostly a bound on one side), and *within 2 u* asks that the truth lie in that. \
+The change over the measured time, which the report states for every \
 drift, is the size the data determine whatever the form found: read that column. The drifts \
 searched settle no faster than a third of the interval between repeated visits of a pose (one \
 programme cycle, about 900–1 600 s here): the differences between a pose's consecutive visits, \
@@ -1655,4 +1673,71 @@ report says that the sampling cannot show the effect's period (as in the power t
         }
     }
     s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use mte_diagnose::Interval;
+
+    fn drift(unit: &'static str, value: f64) -> TrueEffect {
+        TrueEffect {
+            iso_name_hint: "EXX".into(),
+            kind: EffectKind::Drift,
+            size: 10.0,
+            unit,
+            value,
+            signed: true,
+            detail: String::new(),
+            period: None,
+            drift: None,
+        }
+    }
+
+    fn found(estimate: &str, value: f64, first_order_final: Option<Interval>) -> FoundEffect {
+        FoundEffect {
+            name: "EXX scale drift".into(),
+            estimates: vec![(estimate.into(), value, 1e-7, None)],
+            alternatives: Vec::new(),
+            period: None,
+            first_order_final,
+        }
+    }
+
+    #[test]
+    fn a_first_order_drift_found_linear_is_judged_by_where_the_report_says_it_would_settle() {
+        // A 10 ppm final scale change found as a linear drift (its estimate a rate).
+        let truth = drift("ppm", 10e-6);
+        let bound = |lower, upper| Some(Interval { lower, upper });
+        // At least 6 ppm: the truth lies in the one-sided interval.
+        assert!(estimate_matches(
+            &truth,
+            &found("EXX scale rate", 3e-9, bound(Some(6e-6), None)),
+            2.0
+        ));
+        // At most 8 ppm: it does not.
+        assert!(!estimate_matches(
+            &truth,
+            &found("EXX scale rate", 3e-9, bound(Some(2e-6), Some(8e-6))),
+            2.0
+        ));
+        // Without that statement a rate is no final value.
+        assert!(!estimate_matches(
+            &truth,
+            &found("EXX scale rate", 3e-9, None),
+            2.0
+        ));
+        // A linear drift's rate is never compared with a first-order finding's final value.
+        let linear = drift("um/min", 0.1 / 60e3);
+        assert!(!estimate_matches(
+            &linear,
+            &found("EXX change", 1.7e-6, None),
+            2.0
+        ));
+        assert!(estimate_matches(
+            &linear,
+            &found("EXX rate", 0.1 / 60e3, None),
+            2.0
+        ));
+    }
 }

@@ -155,6 +155,42 @@ pub struct Finding {
     pub separated_by: Option<String>,
     /// The covariate that exposes it.
     pub exposed_by: Option<String>,
+    /// For a linear drift: where the first-order drift of the same parameter would settle (its
+    /// time constant did not lower χ² by enough for the data to choose it).
+    pub first_order: Option<FirstOrderFit>,
+}
+
+/// Where a drift found linear would settle if it is a first-order one: the first-order drift of
+/// the same parameter profiled over time constants from a thirtieth of the record, fitted
+/// beside the rest of the final model. A drift that has not settled within the record fits as
+/// well at every longer time constant, and then has no final value the data bound (an open end).
+#[derive(Debug, Clone, Serialize)]
+pub struct FirstOrderFit {
+    /// The first-order drift's name.
+    pub name: String,
+    /// 95 % interval of its time constant, s.
+    pub time_constant_s: Interval,
+    /// 95 % interval of the value it settles to (its first coefficient), internal units.
+    pub final_value: Interval,
+    /// What kind of quantity the final value is.
+    pub quantity: Quantity,
+}
+
+impl FirstOrderFit {
+    /// The sentence the report's notes give it, for the linear drift `linear`.
+    pub fn note(&self, linear: &str) -> String {
+        let stem = linear.strip_suffix(" drift").unwrap_or(linear);
+        format!(
+            "{linear}: a first-order drift of {stem} fits these data as well (95 %: time constant {}, final value {}){}",
+            self.time_constant_s.describe(Quantity::Duration),
+            self.final_value.describe(self.quantity),
+            if self.final_value.lower.is_none() || self.final_value.upper.is_none() {
+                "; the drift has not settled within the record, and where it ends the data do not say"
+            } else {
+                ""
+            }
+        )
+    }
 }
 
 /// A reading the final model misses by far more than the rest: its residual, in units of the
@@ -768,7 +804,7 @@ fn conclude(
     let span = record_span(obs);
     let (terms, x, sol, fit, extended, cov, hyper_rows, extended_parameters) = loop {
         if let Some(span) = span {
-            exchanged.extend(first_order_courses(&searcher, &mut chosen, &base_fit, span));
+            exchanged.extend(drift_courses(&searcher, &mut chosen, &base_fit, span));
         }
         let terms: Vec<Term> = searcher.with(&chosen, None).into_iter().cloned().collect();
         let (x, fit) = searcher.fit_of(&base_fit, &terms.iter().collect::<Vec<_>>());
@@ -931,6 +967,7 @@ fn conclude(
             alternatives: c.alternatives.clone(),
             separated_by: c.separated_by.clone(),
             exposed_by: c.term.exposed_by.clone(),
+            first_order: None,
         })
         .collect();
     // A drift's size over the data: the change of its parameter from the first reading to the
@@ -978,7 +1015,9 @@ fn conclude(
                 Family::Drift {
                     time_constant_s: None,
                 } => {
-                    unsettled.extend(unsettled_note(candidates, c, span, profile));
+                    let fit = first_order_fit(candidates, obs, c, span, profile);
+                    unsettled.extend(fit.as_ref().map(|f| f.note(&c.term.name)));
+                    findings[k].first_order = fit;
                     continue;
                 }
                 _ => continue,
@@ -3219,7 +3258,7 @@ impl Searcher<'_> {
                 // data say so, and the causes that rest on the base's orders alone leave.
                 let mut chosen = found.chosen;
                 if let Some(span) = record_span(obs) {
-                    first_order_courses(&searcher, &mut chosen, &completed_fit, span);
+                    drift_courses(&searcher, &mut chosen, &completed_fit, span);
                 }
                 let x_base = design(&completed.iter().collect::<Vec<_>>(), n);
                 let (x, fit) = searcher.drop_resting_on_orders(&mut chosen, &completed_fit);
@@ -3970,38 +4009,29 @@ fn accumulated(q: Quantity) -> Quantity {
 }
 
 /// For a drift found linear (`c`, over a record of `span` s): where the first-order drift of the
-/// same parameter (its twin in the library) would settle, by its profile over time
-/// constants from a thirtieth of the record (`profile`, [`settling_intervals`]) — a drift that has
-/// not settled within the record fits as well at every longer time constant, and then has no
-/// final value the data bound. Said in one sentence; `None` where the library has no such
-/// candidate.
-fn unsettled_note(
+/// same parameter (its twin in the library, [`drift_twin`]) would settle, by its profile over
+/// time constants from a thirtieth of the record (`profile`, [`settling_intervals`]). `None`
+/// where the library has no such candidate.
+fn first_order_fit(
     candidates: &[Box<dyn Candidate>],
+    obs: &Observations,
     c: &Chosen,
     span: f64,
     profile: impl Fn(&Drifting<'_>) -> Option<(Interval, Vec<Interval>)>,
-) -> Option<String> {
-    let stem = c.term.name.strip_suffix(" drift")?;
-    let sibling = candidates[first_order_twin(candidates, c, span)?].as_ref();
-    let q = accumulated(c.term.coefficients.first()?.1);
+) -> Option<FirstOrderFit> {
+    let (twin, term) = drift_twin(candidates, obs, c, span)?;
     let (tau, values) = profile(&Drifting {
-        candidate: sibling,
+        candidate: candidates[twin].as_ref(),
         variant: 0,
         component: 0,
         tau: span,
     })?;
-    let value = values.first()?;
-    Some(format!(
-        "{}: a first-order drift of {stem} fits these data as well (95 %: time constant {}, final value {}){}",
-        c.term.name,
-        tau.describe(Quantity::Duration),
-        value.describe(q),
-        if value.lower.is_none() || value.upper.is_none() {
-            "; the drift has not settled within the record, and where it ends the data do not say"
-        } else {
-            ""
-        }
-    ))
+    Some(FirstOrderFit {
+        name: term.name,
+        time_constant_s: tau,
+        final_value: *values.first()?,
+        quantity: accumulated(c.term.coefficients.first()?.1),
+    })
 }
 
 /// The time from the first reading to the last, s (`None` without a time column).
@@ -4012,57 +4042,72 @@ fn record_span(obs: &Observations) -> Option<f64> {
     })
 }
 
-/// The first-order twin of the linear drift `c` (`span`: the record's, s): the candidate that
-/// builds on the same term as `c`'s, named `"{stem} drift exp"`.
-fn first_order_twin(candidates: &[Box<dyn Candidate>], c: &Chosen, span: f64) -> Option<usize> {
-    let stem = c.term.name.strip_suffix(" drift")?;
+/// The other form of drift `c` on the observations `obs` (`span`: the record's, s): for a
+/// linear drift `"{stem} drift"` the first-order one `"{stem} drift exp"` that builds on the same
+/// term (its candidate, and its term at a time constant of the span), and the other way round;
+/// `None` for any other term, or where the candidates have no such twin.
+fn drift_twin(
+    candidates: &[Box<dyn Candidate>],
+    obs: &Observations,
+    c: &Chosen,
+    span: f64,
+) -> Option<(usize, Term)> {
+    let (twin, first_order) = match c.term.name.strip_suffix(" drift exp") {
+        Some(stem) => (format!("{stem} drift"), false),
+        None => (
+            format!("{} drift exp", c.term.name.strip_suffix(" drift")?),
+            true,
+        ),
+    };
     let required = candidates.get(c.candidate)?.requires();
-    let twin = format!("{stem} drift exp");
     candidates
         .iter()
-        .position(|k| k.requires() == required && k.at(0, span).is_some_and(|t| t.name == twin))
+        .enumerate()
+        .filter(|(_, k)| k.requires() == required)
+        .find_map(|(i, k)| {
+            // (A linear drift has no time constant to set: its one variant.)
+            let t = match k.at(0, span) {
+                Some(t) => first_order.then_some(t),
+                None if !first_order => k.variants(obs).into_iter().next(),
+                None => None,
+            }?;
+            (t.name == twin).then_some((i, t))
+        })
 }
 
-/// Linear drifts whose course the data say is first-order: the first-order drift of the same
-/// parameter ([`first_order_twin`]) in its place, its time constant chosen over its grid and
-/// refined with the rest of the model fitted, leaves the model's χ² lower by more than
-/// [`EXCHANGE_CHI2`] (in the model's residual variance). The search's exchange offers that
-/// rival too, but while a first-order drift of the same displacement that entered later is still
-/// in the model beside it; once the final model lets that one go (its size undetermined beside
-/// the linear one, the two being nearly one column), the linear drift is left to carry a course
-/// it does not have. Each such drift takes its first-order form in `chosen` (`span`: the
-/// record's, s); returns the exchanges.
-fn first_order_courses(
+/// Each drift in the form its data earn: a first-order drift's time constant is one parameter
+/// more than its linear twin ([`drift_twin`], the limit of a time constant beyond the record),
+/// and the first-order form holds only where, with the rest of the model fitted, it leaves χ²
+/// lower than the linear one by more than [`EXCHANGE_CHI2`] (in the model's residual
+/// variance) — the search's exchange threshold. A linear drift is offered its first-order twin
+/// (the time constant chosen over the candidate's grid and refined): the search's exchange
+/// offers that rival only while a first-order drift of the same displacement that entered later
+/// is still in the model, and once the final model lets that one go (its size undetermined
+/// beside the linear one, the two being nearly one column) the linear drift would be left to
+/// carry a course it does not have. A first-order drift is offered its linear twin: it entered
+/// on a cross-validated RMS a little better than the linear one's, which on a few hundred
+/// readings is a smaller gain than a time constant must earn. Each drift takes the form the
+/// test gives in `chosen` (`span`: the record's, s); returns the exchanges.
+fn drift_courses(
     searcher: &Searcher<'_>,
     chosen: &mut Vec<Chosen>,
     base_fit: &Projector,
     span: f64,
 ) -> Vec<Exchange> {
     let mut exchanged = Vec::new();
-    let linear = |c: &Chosen| {
-        matches!(
-            c.term.family,
-            Family::Drift {
-                time_constant_s: None
-            }
-        )
-    };
-    if !chosen.iter().any(linear) {
+    let is_drift = |c: &Chosen| matches!(c.term.family, Family::Drift { .. });
+    if !chosen.iter().any(is_drift) {
         return exchanged;
     }
     let (_, fit) = searcher.fit_of(base_fit, &searcher.with(chosen, None));
     let variance = fit.rss_w() / fit.dof().max(1) as f64;
     let mut rss = fit.rss_w();
     for k in 0..chosen.len() {
-        if !linear(&chosen[k]) {
-            continue;
-        }
-        let Some(twin) = first_order_twin(searcher.candidates, &chosen[k], span) else {
+        let Some((twin, term)) = drift_twin(searcher.candidates, searcher.obs, &chosen[k], span)
+        else {
             continue;
         };
-        let Some(term) = searcher.candidates[twin].at(0, span) else {
-            continue;
-        };
+        let to_first_order = term.name.ends_with(" drift exp");
         let mut trial = chosen.clone();
         (
             trial[k].term,
@@ -4070,18 +4115,23 @@ fn first_order_courses(
             trial[k].variant,
             trial[k].component,
         ) = (term, twin, 0, 0);
-        searcher.rechoose(&mut trial, k, base_fit);
+        if to_first_order {
+            searcher.rechoose(&mut trial, k, base_fit);
+        }
         let (_, trial_fit) = searcher.fit_of(base_fit, &searcher.with(&trial, None));
-        if trial_fit.rss_w() < rss - EXCHANGE_CHI2 * variance {
-            // The data told the forms apart: the linear drifts listed as alternatives go too.
+        let drop = rss - trial_fit.rss_w();
+        let earned = EXCHANGE_CHI2 * variance;
+        if (to_first_order && drop > earned) || (!to_first_order && drop > -earned) {
             let by = trial[k].term.name.clone();
+            // The data told the forms apart: the linear drifts listed as alternatives of a
+            // first-order one go too.
             trial[k]
                 .alternatives
-                .retain(|a| *a != by && !a.ends_with(" drift"));
+                .retain(|a| *a != by && !(to_first_order && a.ends_with(" drift")));
             exchanged.push(Exchange {
                 replaced: chosen[k].term.name.clone(),
                 by,
-                chi2_drop: (rss - trial_fit.rss_w()) / variance,
+                chi2_drop: drop / variance,
             });
             rss = trial_fit.rss_w();
             *chosen = trial;
@@ -5350,6 +5400,7 @@ mod tests {
             alternatives: Vec::new(),
             separated_by: None,
             exposed_by: Some("X".into()),
+            first_order: None,
         }
     }
 

@@ -19,7 +19,7 @@ pub use candidate::{
 pub use data::{Observations, Variable, VariableKind};
 pub use engine::{
     Compound, DETECTION_POWER, DetectionLimit, DiagnoseParams, Diagnosis, Exchange, Finding,
-    FitQuality, HeldOut, Outlier, VariantLimit, Verdict, diagnose,
+    FirstOrderFit, FitQuality, HeldOut, Outlier, VariantLimit, Verdict, diagnose,
 };
 pub use instruments::{load, load_with_noise};
 pub use model::{DriftOf, Effects, ObservationModel, Prepared, prepare};
