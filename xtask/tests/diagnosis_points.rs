@@ -15,6 +15,7 @@ fn run(seed: u64, state_offset: bool) -> (PointsTruth, Diagnosis) {
     let base = serde_json::json!({ "location": true, "terms": ["EXX scale"] });
     let truth = write_points(seed, &dir, state_offset, Some(base)).expect("write dataset");
     let p = load(&truth.manifest).expect("load points dataset");
+    let _ = std::fs::remove_dir_all(&dir);
     let d = p.diagnose(&DiagnoseParams::default()).expect("diagnose");
     (truth, d)
 }

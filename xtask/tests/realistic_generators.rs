@@ -3,6 +3,10 @@
 //! gives the analytic tip deviation, a B pivot offset gives the ISO 10791-6 BK1 pattern, a
 //! reversal separates the two directions by its size, and nothing hidden reaches the files.
 
+// (The diagnosis tests' scratch directories.)
+#[path = "../../crates/mte-diagnose/tests/common/mod.rs"]
+mod common;
+
 use std::collections::BTreeMap;
 use std::path::Path;
 
@@ -65,8 +69,9 @@ fn perfect(kind: Kind, hidden: &[Hidden]) -> Spec {
     s
 }
 
-fn tmp(name: &str) -> std::path::PathBuf {
-    std::env::temp_dir().join(format!("xtask-realistic-{name}-{}", std::process::id()))
+/// A scratch directory for one dataset, removed when the test is done with it.
+fn tmp(name: &str) -> common::Scratch {
+    common::scratch(&format!("xtask-realistic-{name}"))
 }
 
 /// Values are printed with 4 decimals of a µm (R-test, axis) or 7 decimals of a mm (tracker):

@@ -3,7 +3,7 @@
 //! The generator below knows the effects; the diagnosis only reads the files it writes, and the
 //! tests look at the named cause after the diagnosis has run.
 
-use std::path::PathBuf;
+mod common;
 
 use mte_diagnose::{DiagnoseParams, Family, load};
 use rand::SeedableRng;
@@ -49,11 +49,11 @@ fn dense_targets() -> Vec<f64> {
 }
 
 /// Writes 5 bidirectional runs at `targets` and returns the manifest path.
-fn write_dataset(name: &str, hidden: Hidden, seed: u64) -> PathBuf {
+fn write_dataset(name: &str, hidden: Hidden, seed: u64) -> common::Dataset {
     write_dataset_at(name, &dense_targets(), hidden, seed)
 }
 
-fn write_dataset_at(name: &str, targets: &[f64], hidden: Hidden, seed: u64) -> PathBuf {
+fn write_dataset_at(name: &str, targets: &[f64], hidden: Hidden, seed: u64) -> common::Dataset {
     write_runs(
         name,
         "X",
@@ -798,8 +798,7 @@ fn rotary_axis_worm_gear_error_and_reversal_are_found_in_arcsec() {
 
 #[test]
 fn bad_axis_files_give_errors_naming_the_line() {
-    let dir = std::env::temp_dir().join(format!("mte-diagnose-axis-bad-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = common::scratch("axis-bad");
     std::fs::write(
         dir.join("runs.csv"),
         "run,direction,x_mm,deviation_um\n1,+,0,1.0\n1,+,10,abc\n",
@@ -983,9 +982,8 @@ fn write_runs(
     seed: u64,
     dt: f64,
     f: impl Fn(f64, f64, f64, usize) -> f64,
-) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("mte-diagnose-axis-{name}-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+) -> common::Dataset {
+    let dir = common::scratch(&format!("axis-{name}"));
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     let noise = Normal::new(0.0, sigma).unwrap();
     let rotary = axis == "C";
@@ -1017,7 +1015,7 @@ fn write_runs(
         r#"{{"format": "mte-dataset/1", "kind": "axis", "axis": "{axis}", "{noise_key}": {sigma}, "data": "runs.csv"}}"#
     );
     std::fs::write(dir.join("manifest.json"), manifest).unwrap();
-    dir.join("manifest.json")
+    common::Dataset::new(dir)
 }
 
 /// 40 targets about 9° apart, jittered by up to ±3° (ISO 230-2's irregular steps), from `seed`.

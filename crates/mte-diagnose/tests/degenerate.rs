@@ -1,6 +1,7 @@
 //! Designs that cannot show some effects, and settings out of range: a clear answer, never a
 //! panic.
 
+mod common;
 use mte_diagnose::{
     DiagnoseError, DiagnoseParams, Family, Observations, Quantity, Term, Variable, VariableKind,
     diagnose,
@@ -169,8 +170,7 @@ fn significance_level_outside_zero_to_one_half_is_an_error() {
 /// are built, with the figure; under the limit the same data load and the estimate is stated.
 #[test]
 fn a_log_beyond_the_memory_limit_is_refused_with_the_figure() {
-    let dir = std::env::temp_dir().join(format!("mte-diagnose-large-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = common::scratch("large");
     let rows = 50_000;
     let mut csv = String::from("run,direction,x_mm,deviation_um\n");
     for i in 0..rows {

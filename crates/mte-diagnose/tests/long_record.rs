@@ -2,6 +2,8 @@
 //! what the search finds is fitted to every observation: the sizes and their uncertainties come
 //! from all of them, and the report says how the search was run.
 
+mod common;
+
 use mte_diagnose::{DiagnoseParams, load};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
@@ -59,7 +61,7 @@ fn write_log(
 
 #[test]
 fn a_long_log_is_searched_thinned_and_fitted_whole() {
-    let dir = std::env::temp_dir().join(format!("mte-diagnose-long-{}", std::process::id()));
+    let dir = common::scratch("long");
     let rows = 16 * 2_500;
     let manifest = write_log(&dir, 2_500, 0.8, 1.5);
     let p = load(&manifest).unwrap();
@@ -70,7 +72,6 @@ fn a_long_log_is_searched_thinned_and_fitted_whole() {
         "the test needs a record longer than the search"
     );
     let d = p.diagnose(&params).unwrap();
-    let _ = std::fs::remove_dir_all(&dir);
     assert!(
         d.notes.iter().any(
             |n| n.contains("long record") && n.contains(&format!("of the {rows} observations"))

@@ -1,6 +1,7 @@
 //! Manifests: the instrument is picked from `format` and `kind`, unknown fields are errors, a
 //! UTF-8 byte-order mark is accepted, and messages name the file and the field.
 
+mod common;
 use std::path::PathBuf;
 
 fn fixture() -> PathBuf {
@@ -9,8 +10,7 @@ fn fixture() -> PathBuf {
 
 /// Writes `manifest` beside a copy of the bundled axis runs and loads it.
 fn load_with(name: &str, manifest: &[u8]) -> Result<mte_diagnose::Prepared, String> {
-    let dir = std::env::temp_dir().join(format!("mte-manifests-{}-{name}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = common::scratch(&format!("manifests-{name}"));
     std::fs::copy(fixture().join("runs.csv"), dir.join("runs.csv")).unwrap();
     std::fs::write(dir.join("manifest.json"), manifest).unwrap();
     mte_diagnose::load(&dir.join("manifest.json")).map_err(|e| e.to_string())
@@ -73,8 +73,7 @@ fn a_missing_format_says_which_are_read() {
 fn an_absurd_point_is_an_error_not_a_hang() {
     let src =
         PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../fixtures/datasets/c-stage-points");
-    let dir = std::env::temp_dir().join(format!("mte-manifests-{}-points", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = common::scratch("manifests-points");
     for f in ["manifest.json", "machine.json"] {
         std::fs::copy(src.join(f), dir.join(f)).unwrap();
     }

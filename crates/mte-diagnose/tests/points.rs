@@ -5,7 +5,7 @@
 //! catalogue, places the instrument in two poses the diagnosis is not told, adds Gaussian noise
 //! to every coordinate and writes the files.
 
-use std::path::PathBuf;
+mod common;
 
 use mte_diagnose::{DiagnoseParams, Diagnosis, Family, load};
 use mte_errors::units::Kind;
@@ -22,11 +22,9 @@ const NOISE_UM: f64 = 0.5;
 /// defines `EC0Y`), a yaw of X and a pitch of Z growing linearly along their travel, measured
 /// at every position with a target at each of `targets` (tool frame, mm, from the tool tip, on a
 /// holder turned a little; one target: no per-row target columns).
-fn write_dataset(name: &str, theta: f64, targets: &[[f64; 3]], seed: u64) -> PathBuf {
+fn write_dataset(name: &str, theta: f64, targets: &[[f64; 3]], seed: u64) -> common::Dataset {
     let machine = Machine::library("seed004-3axis").unwrap();
-    let dir =
-        std::env::temp_dir().join(format!("mte-diagnose-points-{name}-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = common::scratch(&format!("points-{name}"));
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     let noise = Normal::new(0.0, NOISE_UM * 1e-3).unwrap();
     let squareness = Evaluator::new(
@@ -101,9 +99,8 @@ fn write_dataset(name: &str, theta: f64, targets: &[[f64; 3]], seed: u64) -> Pat
     let manifest = format!(
         r#"{{"format": "mte-dataset/1", "kind": "points", "machine": "seed004-3axis", "noise_um": {NOISE_UM}, "data": "points.csv", "target": "tool", "target_mm": {target_mm:?}, "base_model": {{"components": {{"degree": 3}}}}}}"#
     );
-    let path = dir.join("manifest.json");
-    std::fs::write(&path, manifest).unwrap();
-    path
+    std::fs::write(dir.join("manifest.json"), manifest).unwrap();
+    common::Dataset::new(dir)
 }
 
 fn run(path: &std::path::Path) -> Diagnosis {

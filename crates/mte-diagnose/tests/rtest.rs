@@ -5,7 +5,7 @@
 //! writes CSV + manifest; the diagnosis reads only those files (first-order model, its own
 //! candidate library). The tests look at the named cause after the diagnosis has run.
 
-use std::path::PathBuf;
+mod common;
 
 use mte_diagnose::{DiagnoseParams, Diagnosis, load_with_noise};
 use mte_kinematics::Machine;
@@ -124,7 +124,7 @@ fn write_dataset(
     errors: &[Injected],
     cycles: usize,
     seed: u64,
-) -> PathBuf {
+) -> common::Dataset {
     write_dataset_with_base(name, balls, errors, cycles, seed, Some(PIVOTS_ONLY))
 }
 
@@ -140,7 +140,7 @@ fn write_dataset_with_base(
     cycles: usize,
     seed: u64,
     base_model: Option<&str>,
-) -> PathBuf {
+) -> common::Dataset {
     write_dataset_on(&TRUNNION, name, balls, errors, cycles, seed, base_model)
 }
 
@@ -181,13 +181,11 @@ fn write_dataset_on(
     cycles: usize,
     seed: u64,
     base_model: Option<&str>,
-) -> PathBuf {
+) -> common::Dataset {
     let machine = Machine::library(rig.machine).unwrap();
     let axes: Vec<String> = machine.axes().iter().map(|a| a.name.clone()).collect();
     let n_slots = machine.n_slots();
-    let dir =
-        std::env::temp_dir().join(format!("mte-diagnose-rtest-{name}-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = common::scratch(&format!("rtest-{name}"));
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     let noise = Normal::new(0.0, NOISE_UM).unwrap();
     let zero = vec![0.0; n_slots];
@@ -297,9 +295,8 @@ fn write_dataset_on(
         axes,
         setups_json.join(", ")
     );
-    let path = dir.join("manifest.json");
-    std::fs::write(&path, manifest).unwrap();
-    path
+    std::fs::write(dir.join("manifest.json"), manifest).unwrap();
+    common::Dataset::new(dir)
 }
 
 fn run(path: &std::path::Path) -> Diagnosis {

@@ -4,7 +4,7 @@
 //! interferometric lengths from four stations (dead paths unknown to the diagnosis, Gaussian
 //! length noise) and writes the files; the diagnosis adjusts the network and looks for causes.
 
-use std::path::PathBuf;
+mod common;
 
 use mte_diagnose::{DiagnoseParams, Diagnosis, Family, load};
 use mte_errors::units::Kind;
@@ -44,14 +44,10 @@ const NONE: Hidden = Hidden {
     base_model: None,
 };
 
-fn write_dataset(name: &str, hidden: &Hidden, seed: u64) -> PathBuf {
+fn write_dataset(name: &str, hidden: &Hidden, seed: u64) -> common::Dataset {
     let machine = Machine::library("seed004-3axis").unwrap();
     let n_slots = machine.n_slots();
-    let dir = std::env::temp_dir().join(format!(
-        "mte-diagnose-tracker-{name}-{}",
-        std::process::id()
-    ));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = common::scratch(&format!("tracker-{name}"));
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     let noise = Normal::new(0.0, NOISE_UM * 1e-3).unwrap();
     let stations = [
@@ -147,9 +143,8 @@ fn write_dataset(name: &str, hidden: &Hidden, seed: u64) -> PathBuf {
         r#"{{"format": "mte-dataset/1", "kind": "tracker", "machine": "seed004-3axis", "noise_um": {NOISE_UM}, "data": "lengths.csv", "targets": "targets.csv", "setups": [{}]{base}}}"#,
         setups.join(", ")
     );
-    let path = dir.join("manifest.json");
-    std::fs::write(&path, manifest).unwrap();
-    path
+    std::fs::write(dir.join("manifest.json"), manifest).unwrap();
+    common::Dataset::new(dir)
 }
 
 fn run(path: &std::path::Path) -> Diagnosis {
