@@ -52,7 +52,14 @@ fn bench(c: &mut Criterion) {
         let truth = write_spec(&spec, seed, &dir.join(name)).expect("dataset written");
         let prepared =
             || mte_diagnose::load_with_noise(&truth.manifest, noise).expect("dataset loads");
-        eprintln!("{name}: seed {seed}, {} observations", truth.n_observations);
+        let found = prepared()
+            .diagnose(&mte_diagnose::DiagnoseParams::default())
+            .expect("diagnosis runs");
+        let names: Vec<&str> = found.findings.iter().map(|f| f.name.as_str()).collect();
+        eprintln!(
+            "{name}: seed {seed}, {} observations; found {names:?}",
+            truth.n_observations
+        );
         // The baseline of the same run: reading and preparing the dataset alone.
         group.bench_function(format!("{name}_load"), |b| b.iter(|| black_box(prepared())));
         group.bench_function(name, |b| {
