@@ -71,7 +71,7 @@ fn perfect(kind: Kind, hidden: &[Hidden]) -> Spec {
 
 /// A scratch directory for one dataset, removed when the test is done with it.
 fn tmp(name: &str) -> common::Scratch {
-    common::scratch(&format!("xtask-realistic-{name}"))
+    common::scratch(&format!("realistic-{name}"))
 }
 
 /// Values are printed with 4 decimals of a µm (R-test, axis) or 7 decimals of a mm (tracker):

@@ -1,5 +1,5 @@
 //! What the diagnosis' integration tests share: scratch directories for the datasets they write,
-//! removed when a test is done with them.
+//! removed when a test is done with them (the command-line and xtask tests use them too).
 // (Each test file uses what it needs of this.)
 #![allow(dead_code)]
 
@@ -22,9 +22,9 @@ impl Drop for Scratch {
     }
 }
 
-/// The scratch directory `mte-diagnose-{name}-{process id}` under the system's temporary folder.
+/// The scratch directory `mte-test-{name}-{process id}` under the system's temporary folder.
 pub fn scratch(name: &str) -> Scratch {
-    let d = std::env::temp_dir().join(format!("mte-diagnose-{name}-{}", std::process::id()));
+    let d = std::env::temp_dir().join(format!("mte-test-{name}-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&d);
     std::fs::create_dir_all(&d).unwrap();
     Scratch(d)
