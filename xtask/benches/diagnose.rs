@@ -43,13 +43,13 @@ fn bench(c: &mut Criterion) {
         ("tracker_tools", tools, None, Some(3_000)),
     ] {
         let seeds = if size.is_some() { 11..=30 } else { 11..=11 };
-        let seed = seeds
-            .min_by_key(|&seed| {
-                let truth = write_spec(&spec, seed, &dir.join(name)).expect("dataset written");
-                size.map_or(0, |size: usize| truth.n_observations.abs_diff(size))
+        let (seed, truth) = seeds
+            .map(|seed| {
+                let at = dir.join(format!("{name}-{seed}"));
+                (seed, write_spec(&spec, seed, &at).expect("dataset written"))
             })
+            .min_by_key(|(_, t)| size.map_or(0, |size: usize| t.n_observations.abs_diff(size)))
             .expect("a seed");
-        let truth = write_spec(&spec, seed, &dir.join(name)).expect("dataset written");
         let prepared =
             || mte_diagnose::load_with_noise(&truth.manifest, noise).expect("dataset loads");
         let found = prepared()
