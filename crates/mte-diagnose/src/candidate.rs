@@ -618,21 +618,21 @@ pub struct BaseModelSpec {
     /// coordinate up to this degree over the observed range for a linear axis (from degree 2
     /// for a straightness, whose linear part is the squareness), harmonics of a turn up to
     /// ⌈degree / 2⌉ for a rotary axis (an error motion repeats every turn).
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub components: Option<ComponentSpec>,
     /// The squareness errors of every pair of linear axes.
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub squareness: bool,
     /// The location errors of every rotary axis: the position of its line across the axis and
     /// its orientation (ISO 230-7), as far as the setups can separate them.
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub location: bool,
     /// Further terms by their library name (`EC0Y`, `EXX poly3`, `EXX reversal`).
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub terms: Vec<String>,
     /// Ordinary errors the shorthands above leave out, by ISO name (`ECC` for the angular
     /// positioning error of C, `EC0Y`, `EA0B`): "every component error but C's positioning".
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub except: Vec<String>,
 }
 
@@ -803,6 +803,79 @@ impl BaseModelSpec {
 }
 
 impl BaseModelSpec {
+    /// The spec in words, for a report: the ordinary errors it holds. `location`: the location
+    /// errors `"location": true` stands for on the dataset.
+    pub fn describe(&self, location: &[String]) -> String {
+        let mut parts = Vec::new();
+        if let Some(c) = &self.components {
+            parts.push(format!(
+                "every component error of every axis the data move (a polynomial up to degree {} along a linear axis, harmonics 1–{} of a turn of a rotary axis)",
+                c.degree,
+                c.degree.div_ceil(2)
+            ));
+        }
+        if self.squareness {
+            parts.push("the squareness errors of every pair of linear axes".into());
+        }
+        // One name per error: the absolute form (`EX0B abs`) is the same error.
+        let mut names: Vec<&str> = Vec::new();
+        for n in location {
+            let n = n.strip_suffix(" abs").unwrap_or(n);
+            if !names.contains(&n) {
+                names.push(n);
+            }
+        }
+        // (A machine without rotary axes, or set-ups that separate none: nothing to say.)
+        if self.location && !names.is_empty() {
+            parts.push(format!(
+                "the location errors of the rotary axes that the set-ups separate ({})",
+                names.join(", ")
+            ));
+        }
+        parts.extend(self.terms.iter().cloned());
+        let mut text = match parts.split_last() {
+            None => "no machine errors".to_string(),
+            Some((last, [])) => last.clone(),
+            Some((last, rest)) => format!("{} and {last}", rest.join("; ")),
+        };
+        if !self.except.is_empty() {
+            text += &format!(", except {}", self.except.join(", "));
+        }
+        text
+    }
+
+    /// Which shorthand of the spec would hold a finding of family `family` named `name` that
+    /// the spec leaves out — `"components"`, `"squareness"` or `"location"` — for an ordinary
+    /// error every machine has: a component error of a linear axis, an error motion of a rotary
+    /// axis (`per_turn`: a periodic finding's whole number of cycles per turn of a rotary
+    /// axis), a squareness or a location error. `None` for anything else and for an error the
+    /// spec leaves out on purpose (`except`).
+    pub fn would_hold(
+        &self,
+        family: &Family,
+        name: &str,
+        per_turn: Option<usize>,
+    ) -> Option<&'static str> {
+        let iso = name.split_whitespace().next().unwrap_or(name);
+        if self.except.iter().any(|e| e == iso) {
+            return None;
+        }
+        match family {
+            Family::Component { .. } | Family::Scale if self.components.is_none() => {
+                Some("components")
+            }
+            Family::Periodic { .. }
+                if self.components.is_none()
+                    && per_turn.is_some_and(|k| k <= MAX_COMPONENT_HARMONIC) =>
+            {
+                Some("components")
+            }
+            Family::Squareness if !self.squareness => Some("squareness"),
+            Family::Location if !self.location => Some("location"),
+            _ => None,
+        }
+    }
+
     /// The completions of the spec's component errors, each block after the one before: for
     /// every component error of a linear axis in the base, its next polynomial degrees (up to
     /// [`MAX_COMPONENT_DEGREE`], [`COMPLETION_BLOCK`] at a time), and all its degrees beyond the
@@ -1685,6 +1758,66 @@ pub(crate) fn format_period(p: f64, rotary: bool) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_base_model_is_described_in_its_own_terms_and_knows_which_ordinary_errors_it_lacks() {
+        let location = ["EX0C".to_string(), "EY0C".into(), "EX0C abs".into()];
+        let r_test = BaseModelSpec {
+            location: true,
+            ..BaseModelSpec::default()
+        };
+        assert_eq!(
+            r_test.describe(&location),
+            "the location errors of the rotary axes that the set-ups separate (EX0C, EY0C)"
+        );
+        let full = BaseModelSpec {
+            components: Some(ComponentSpec { degree: 3 }),
+            squareness: true,
+            location: true,
+            terms: vec!["EXX reversal".into()],
+            except: vec!["EC0Y".into()],
+        };
+        assert_eq!(
+            full.describe(&[]),
+            "every component error of every axis the data move (a polynomial up to degree 3 \
+             along a linear axis, harmonics 1–2 of a turn of a rotary axis); the squareness \
+             errors of every pair of linear axes and EXX reversal, except EC0Y"
+        );
+        assert_eq!(
+            BaseModelSpec::default().describe(&location),
+            "no machine errors"
+        );
+        // Ordinary errors the location-only base lacks: component errors, a rotary axis'
+        // error motion over a whole number of cycles per turn (not a worm gear's), squareness.
+        let poly = Family::Component { degree: 3 };
+        assert_eq!(
+            r_test.would_hold(&poly, "EAZ poly3", None),
+            Some("components")
+        );
+        let wave = Family::Periodic { period: 1.0 };
+        assert_eq!(
+            r_test.would_hold(&wave, "EXC periodic", Some(2)),
+            Some("components")
+        );
+        assert_eq!(r_test.would_hold(&wave, "ECC periodic", Some(40)), None);
+        assert_eq!(r_test.would_hold(&wave, "EXX periodic", None), None);
+        assert_eq!(
+            r_test.would_hold(&Family::Squareness, "EC0Y", None),
+            Some("squareness")
+        );
+        assert_eq!(r_test.would_hold(&Family::Location, "EX0C", None), None);
+        assert_eq!(
+            r_test.would_hold(&Family::Reversal, "EXX reversal", None),
+            None
+        );
+        // Left out on purpose: not pointed at.
+        assert_eq!(full.would_hold(&Family::Squareness, "EC0Y", None), None);
+        // The shorthand as a manifest states it, without what it does not set.
+        assert_eq!(
+            serde_json::to_string(&r_test).unwrap(),
+            r#"{"location":true}"#
+        );
+    }
 
     #[test]
     fn no_order_beyond_what_the_positions_carry_apart_from_the_lower_ones() {

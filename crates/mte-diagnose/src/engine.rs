@@ -554,6 +554,9 @@ pub struct Diagnosis {
     pub residual_series: Vec<ResidualSeries>,
     /// Significance level used.
     pub alpha: f64,
+    /// The base model in the user's terms (set by [`crate::Prepared::diagnose`]; `None` from
+    /// [`diagnose`] on terms alone).
+    pub base_model: Option<crate::model::BaseModelUsed>,
 }
 
 impl Diagnosis {
@@ -1308,6 +1311,7 @@ fn conclude(
         held_out: None,
         residual_series,
         alpha: params.alpha,
+        base_model: None,
     })
 }
 

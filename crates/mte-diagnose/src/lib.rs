@@ -22,7 +22,7 @@ pub use engine::{
     FirstOrderFit, FitQuality, HeldOut, Outlier, VariantLimit, Verdict, diagnose,
 };
 pub use instruments::{load, load_with_noise};
-pub use model::{DriftOf, Effects, ObservationModel, Prepared, prepare};
+pub use model::{BaseModelUsed, DriftOf, Effects, ObservationModel, Prepared, prepare};
 pub use structure::StructureTest;
 pub use term::{Estimate, Family, Interval, Quantity, Summary, Term};
 

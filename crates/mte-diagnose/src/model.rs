@@ -3,8 +3,8 @@
 //! The engine ([`crate::diagnose`]) sees only the result; it knows no instrument.
 
 use crate::candidate::{BaseModelSpec, Candidate, SlotEffect, SlotRole, physical_effects};
-use crate::data::Observations;
-use crate::term::Term;
+use crate::data::{Observations, VariableKind};
+use crate::term::{Family, Term};
 use crate::{DiagnoseError, Result};
 
 /// An instrument's view of a machine, linearised at the nominal machine: what was measured,
@@ -132,6 +132,23 @@ pub struct Prepared {
     pub candidates: Vec<Box<dyn Candidate>>,
     /// A title for reports.
     pub title: String,
+    /// The base model in the user's terms, for the report.
+    pub base_model: BaseModelUsed,
+}
+
+/// The base model a diagnosis started from, as the user states it (or the instrument's default
+/// where the dataset states none); in [`crate::Diagnosis::base_model`] and the report.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct BaseModelUsed {
+    /// `true` when the dataset stated it, `false` for the instrument's default.
+    pub stated: bool,
+    /// The spec.
+    pub spec: BaseModelSpec,
+    /// The spec in words ([`BaseModelSpec::describe`]).
+    pub description: String,
+    /// The base's terms that are the instrument's own parameters (sensor zeros, stations, the
+    /// instrument's pose), always fitted.
+    pub instrument_terms: Vec<String>,
 }
 
 impl Prepared {
@@ -141,8 +158,77 @@ impl Prepared {
     /// # Errors
     /// As [`crate::diagnose`].
     pub fn diagnose(self, params: &crate::DiagnoseParams) -> Result<crate::Diagnosis> {
-        crate::diagnose(&self.observations, self.base, &self.candidates, params)
+        let mut d = crate::diagnose(&self.observations, self.base, &self.candidates, params)?;
+        if let Some(note) = ordinary_errors_note(&self.observations, &self.base_model.spec, &d) {
+            d.notes.push(note);
+        }
+        d.base_model = Some(self.base_model);
+        Ok(d)
     }
+}
+
+/// A note for findings that are ordinary errors every machine has — component errors,
+/// squareness, location errors — of a kind the base model `spec` leaves out
+/// ([`BaseModelSpec::would_hold`]): the base that holds them, for the search to look past them.
+fn ordinary_errors_note(
+    obs: &Observations,
+    spec: &BaseModelSpec,
+    d: &crate::Diagnosis,
+) -> Option<String> {
+    let per_turn = |f: &crate::Finding| {
+        let rotary = f
+            .exposed_by
+            .as_deref()
+            .and_then(|v| obs.variable(v))
+            .is_some_and(|v| v.kind == VariableKind::RotaryAxis);
+        match f.family {
+            Family::Periodic { period } if rotary && period > 0.0 => {
+                let k = std::f64::consts::TAU / period;
+                ((k - k.round()).abs() < 1e-6 * k).then_some(k.round() as usize)
+            }
+            _ => None,
+        }
+    };
+    let mut names = Vec::new();
+    let mut fuller = spec.clone();
+    for f in &d.findings {
+        match spec.would_hold(&f.family, &f.name, per_turn(f)) {
+            Some("components") => {
+                fuller.components = Some(crate::candidate::ComponentSpec { degree: 3 });
+            }
+            Some("squareness") => fuller.squareness = true,
+            Some(_) => fuller.location = true,
+            None => continue,
+        }
+        names.push(f.name.as_str());
+    }
+    if names.is_empty() {
+        return None;
+    }
+    let shorthand = serde_json::to_string(&fuller).unwrap_or_default();
+    let which = if names.len() == d.findings.len() {
+        format!(
+            "the cause{} found ({}) {}",
+            if names.len() == 1 { "" } else { "s" },
+            names.join(", "),
+            if names.len() == 1 {
+                "is an ordinary error"
+            } else {
+                "are ordinary errors"
+            }
+        )
+    } else {
+        format!(
+            "{} of the {} causes found ({}) are ordinary errors",
+            names.len(),
+            d.findings.len(),
+            names.join(", ")
+        )
+    };
+    Some(format!(
+        "{which} of the machine's axes, which every machine has and the base model leaves out: a base model that holds {them} (`\"base_model\": {shorthand}` in the dataset's manifest) takes {them} in, and the search then looks past {them} for what that model gets wrong",
+        them = if names.len() == 1 { "it" } else { "them" }
+    ))
 }
 
 /// The base model and the candidate library of an observation model: the instrument's own
@@ -169,6 +255,12 @@ pub fn prepare(
     let spec = match base_model {
         Some(v) => BaseModelSpec::from_json(v).map_err(field_error)?,
         None => effects.default_base.clone(),
+    };
+    let base_model = BaseModelUsed {
+        stated: base_model.is_some(),
+        description: spec.describe(&effects.location),
+        spec: spec.clone(),
+        instrument_terms: effects.instrument.iter().map(|t| t.name.clone()).collect(),
     };
     let named = if spec.terms.is_empty() {
         Vec::new()
@@ -219,5 +311,6 @@ pub fn prepare(
         base,
         candidates,
         title: model.title(),
+        base_model,
     })
 }

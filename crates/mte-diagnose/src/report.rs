@@ -114,6 +114,23 @@ pub fn markdown(d: &Diagnosis, title: &str) -> String {
         d.setup_kind,
         if d.setups.len() == 1 { "" } else { "s" }
     );
+    if let Some(b) = &d.base_model {
+        let _ = writeln!(
+            s,
+            "Base model ({}): {}; with the instrument's own parameters{}.\n",
+            if b.stated {
+                "as the dataset states it"
+            } else {
+                "none stated, the instrument's default"
+            },
+            b.description,
+            match &b.instrument_terms[..] {
+                [] => " (none)".to_string(),
+                [one] => format!(" ({one})"),
+                [first, rest @ ..] => format!(" ({}: {first}, …)", rest.len() + 1),
+            }
+        );
+    }
     let _ = writeln!(s, "## Verdict\n");
     // Without a stated noise the residuals' size is not tested (σ0 is then their RMS in the
     // unit of the weights): only their structure is.

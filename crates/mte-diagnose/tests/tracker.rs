@@ -6,7 +6,7 @@
 
 mod common;
 
-use mte_diagnose::{DiagnoseParams, Diagnosis, Family, load};
+use mte_diagnose::{BaseModelSpec, DiagnoseParams, Diagnosis, Family, load};
 use mte_errors::units::Kind;
 use mte_errors::{AxisState, ErrorSet, Evaluator};
 use mte_kinematics::Machine;
@@ -218,6 +218,23 @@ fn squareness_of_each_plane_is_found_with_the_catalogues_sign() {
         // wrong sign is off by hundreds of u.)
         let e = &f.estimates[0];
         assert!((e.value - theta).abs() <= 3.0 * e.uncertainty, "{}", e.text);
+        // The dataset states no base: the report says so, and that a squareness is an
+        // ordinary error the default (stations only) leaves out, with the base that holds it.
+        let base = d.base_model.as_ref().expect("the base model is stated");
+        assert!(!base.stated && base.spec == BaseModelSpec::default());
+        assert!(
+            report(&d)
+                .contains("Base model (none stated, the instrument's default): no machine errors"),
+            "{}",
+            report(&d)
+        );
+        assert!(
+            d.notes.iter().any(|n| n
+                .contains(&format!("the cause found ({name}) is an ordinary error"))
+                && n.contains(r#"`"base_model": {"squareness":true}`"#)),
+            "{:?}",
+            d.notes
+        );
     }
 }
 
