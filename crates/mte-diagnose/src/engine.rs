@@ -2492,6 +2492,7 @@ impl Searcher<'_> {
                         &sensitivity,
                         &variants,
                         (&terms, &x, &projector, w),
+                        &xtc,
                         (rss, dof),
                         variants_tested,
                     );
@@ -2634,12 +2635,16 @@ impl Searcher<'_> {
     /// cause the base's next orders would hold does not stay in the final model
     /// ([`order_widening`]), so they are against the model with the next order of every base
     /// error in it. Each variant's energy beyond those orders too comes from its products with
-    /// the directions they add, in blocks of a few hundred columns, each one product.
+    /// the directions they add: for the pool's variants, from their products with the model's
+    /// design (`xtc`, the search's) and with the next orders' (one pass over the observations,
+    /// through the values of an entry's spread where it has one), as the search's increments
+    /// do; a variant a refinement changed, from its columns.
     fn limits_beyond_next_orders(
         &self,
         sensitivity: &[Sensitivity<Increment>],
         variants: &SearchVariants,
         (terms, x, projector, w): (&[Term], &DMat, &Projector, &DVec),
+        xtc: &DMat,
         rss_dof: (f64, usize),
         variants_tested: usize,
     ) -> Vec<DetectionLimit> {
@@ -2647,46 +2652,40 @@ impl Searcher<'_> {
         let next = self.next_orders(terms);
         let x_next = design(&next.iter().collect::<Vec<_>>(), obs.len());
         let fit = projector.extended(&x_next);
+        let (r, m) = (projector.rank(), fit.rank() - projector.rank());
+        // (None without next orders: the energies beyond the model itself.)
+        let from_products = (m > 0).then(|| {
+            let mut all = DMat::zeros(xtc.nrows() + x_next.ncols(), xtc.ncols());
+            all.rows_mut(0, xtc.nrows()).copy_from(xtc);
+            all.rows_mut(xtc.nrows(), x_next.ncols())
+                .copy_from(&self.pool.products(&x_next, w));
+            fit.basis_products_of(r..r + m, &all)
+        });
         let directions = fit.directions_beyond(projector);
-        let flat: Vec<(usize, usize, &Increment)> = sensitivity
+        let beyond: HashMap<(usize, usize), (f64, f64)> = sensitivity
             .iter()
             .flat_map(|(ci, incs)| {
                 incs.iter()
                     .filter_map(move |(vi, inc)| inc.as_ref().map(|i| (*ci, *vi, i)))
             })
-            .collect();
-        const BLOCK: usize = 256;
-        let beyond: HashMap<(usize, usize), (f64, f64)> = flat
-            .par_chunks(BLOCK)
-            .flat_map_iter(|chunk| {
-                let width: usize = chunk
-                    .iter()
-                    .map(|c| variants.as_scored(c.0, c.1).width())
-                    .sum();
-                // The block's whitened columns, side by side, and their products with the
-                // directions (none without next orders: the energies beyond the model itself).
-                let b = if directions.ncols() == 0 {
-                    DMat::zeros(0, width)
-                } else {
-                    let mut data = Vec::with_capacity(obs.len() * width);
-                    for &(ci, vi, _) in chunk {
-                        let c = variants.columns(ci, vi);
-                        for column in c.as_slice().chunks_exact(c.nrows().max(1)) {
-                            data.extend(column.iter().zip(w.iter()).map(|(c, w)| c * w));
-                        }
+            .collect::<Vec<_>>()
+            .par_iter()
+            .filter_map(|&(ci, vi, inc)| {
+                let k = variants.as_scored(ci, vi).width();
+                let b = match &from_products {
+                    None => DMat::zeros(0, k),
+                    Some(b) if !variants.is_refined(ci, vi) => {
+                        b.columns(self.pool.offsets[ci][vi], k).into_owned()
                     }
-                    tr_mul(&directions, &DMat::from_vec(obs.len(), width, data))
+                    Some(_) => {
+                        let mut c = variants.columns(ci, vi).into_owned();
+                        for mut column in c.column_iter_mut() {
+                            column.component_mul_assign(w);
+                        }
+                        tr_mul(&directions, &c)
+                    }
                 };
-                let mut at = 0;
-                chunk
-                    .iter()
-                    .filter_map(|&(ci, vi, inc)| {
-                        let k = variants.as_scored(ci, vi).width();
-                        at += k;
-                        inc.beyond(&b.columns(at - k, k).into_owned())
-                            .map(|e| ((ci, vi), e))
-                    })
-                    .collect::<Vec<_>>()
+                inc.beyond(&b).map(|e| ((ci, vi), e))
             })
             .collect();
         let sensitivity: Vec<Sensitivity> = sensitivity
