@@ -803,19 +803,46 @@ impl BaseModelSpec {
 }
 
 impl BaseModelSpec {
-    /// The spec in words, for a report: the ordinary errors it holds. `location`: the location
-    /// errors `"location": true` stands for on the dataset.
-    pub fn describe(&self, location: &[String]) -> String {
+    /// The spec in words, for a report: the ordinary errors it holds of the axes `obs` moves.
+    /// `location`: the location errors `"location": true` stands for on the dataset.
+    pub fn describe(&self, obs: &Observations, location: &[String]) -> String {
+        let axes = |kind: VariableKind| -> Vec<&str> {
+            obs.variables
+                .iter()
+                .filter(|v| v.kind == kind)
+                .map(|v| v.name.as_str())
+                .collect()
+        };
+        let (linear, rotary) = (
+            axes(VariableKind::LinearAxis),
+            axes(VariableKind::RotaryAxis),
+        );
         let mut parts = Vec::new();
         if let Some(c) = &self.components {
-            parts.push(format!(
-                "every component error of every axis the data move (a polynomial up to degree {} along a linear axis, harmonics 1–{} of a turn of a rotary axis)",
-                c.degree,
-                c.degree.div_ceil(2)
-            ));
+            let mut of = Vec::new();
+            if !linear.is_empty() {
+                of.push(format!(
+                    "of {} (polynomials up to degree {})",
+                    linear.join(", "),
+                    c.degree
+                ));
+            }
+            if !rotary.is_empty() {
+                of.push(format!(
+                    "of {} (harmonics 1–{} of a turn)",
+                    rotary.join(", "),
+                    c.degree.div_ceil(2)
+                ));
+            }
+            if !of.is_empty() {
+                parts.push(format!("every component error {}", of.join(" and ")));
+            }
         }
-        if self.squareness {
-            parts.push("the squareness errors of every pair of linear axes".into());
+        if self.squareness && linear.len() >= 2 {
+            parts.push(format!(
+                "the squareness errors between {}",
+                linear.join(", ")
+            ));
         }
         // One name per error: the absolute form (`EX0B abs`) is the same error.
         let mut names: Vec<&str> = Vec::new();
@@ -1766,8 +1793,29 @@ mod tests {
             location: true,
             ..BaseModelSpec::default()
         };
+        let variable = |name: &str, kind| Variable {
+            name: name.into(),
+            kind,
+            values: vec![0.0],
+        };
+        let obs = Observations {
+            values: DVec::zeros(1),
+            sigma: None,
+            variables: vec![
+                variable("X", VariableKind::LinearAxis),
+                variable("Y", VariableKind::LinearAxis),
+                variable("C", VariableKind::RotaryAxis),
+                variable("t", VariableKind::Time),
+            ],
+            setup: vec![0],
+            setup_names: vec!["a".into()],
+            channel: vec![0],
+            channel_names: vec!["d".into()],
+            setup_kind: "setup".into(),
+            quantity: Quantity::Length,
+        };
         assert_eq!(
-            r_test.describe(&location),
+            r_test.describe(&obs, &location),
             "the location errors of the rotary axes that the set-ups separate (EX0C, EY0C)"
         );
         let full = BaseModelSpec {
@@ -1778,13 +1826,12 @@ mod tests {
             except: vec!["EC0Y".into()],
         };
         assert_eq!(
-            full.describe(&[]),
-            "every component error of every axis the data move (a polynomial up to degree 3 \
-             along a linear axis, harmonics 1–2 of a turn of a rotary axis); the squareness \
-             errors of every pair of linear axes and EXX reversal, except EC0Y"
+            full.describe(&obs, &[]),
+            "every component error of X, Y (polynomials up to degree 3) and of C (harmonics \
+             1–2 of a turn); the squareness errors between X, Y and EXX reversal, except EC0Y"
         );
         assert_eq!(
-            BaseModelSpec::default().describe(&location),
+            BaseModelSpec::default().describe(&obs, &location),
             "no machine errors"
         );
         // Ordinary errors the location-only base lacks: component errors, a rotary axis'

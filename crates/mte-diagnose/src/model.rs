@@ -258,7 +258,7 @@ pub fn prepare(
     };
     let base_model = BaseModelUsed {
         stated: base_model.is_some(),
-        description: spec.describe(&effects.location),
+        description: spec.describe(&observations, &effects.location),
         spec: spec.clone(),
         instrument_terms: effects.instrument.iter().map(|t| t.name.clone()).collect(),
     };
