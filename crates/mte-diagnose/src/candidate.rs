@@ -636,6 +636,17 @@ pub struct BaseModelSpec {
     pub except: Vec<String>,
 }
 
+/// The ordinary errors a [`BaseModelSpec`] holds by a shorthand ([`BaseModelSpec::would_hold`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Shorthand {
+    /// `components`.
+    Components,
+    /// `squareness`.
+    Squareness,
+    /// `location`.
+    Location,
+}
+
 /// The component errors of a [`BaseModelSpec`].
 #[derive(Debug, Clone, PartialEq, serde::Deserialize, serde::Serialize)]
 #[serde(deny_unknown_fields)]
@@ -872,35 +883,46 @@ impl BaseModelSpec {
     }
 
     /// Which shorthand of the spec would hold a finding of family `family` named `name` that
-    /// the spec leaves out — `"components"`, `"squareness"` or `"location"` — for an ordinary
-    /// error every machine has: a component error of a linear axis, an error motion of a rotary
-    /// axis (`per_turn`: a periodic finding's whole number of cycles per turn of a rotary
-    /// axis), a squareness or a location error. `None` for anything else and for an error the
-    /// spec leaves out on purpose (`except`).
+    /// the spec leaves out, for an ordinary error every machine has: a component error of a
+    /// linear axis, an error motion of a rotary axis (`per_turn`: a periodic finding's whole
+    /// number of cycles per turn of a rotary axis), a squareness or a location error. `None`
+    /// for anything else and for an error the spec leaves out on purpose (`except`).
     pub fn would_hold(
         &self,
         family: &Family,
         name: &str,
         per_turn: Option<usize>,
-    ) -> Option<&'static str> {
+    ) -> Option<Shorthand> {
         let iso = name.split_whitespace().next().unwrap_or(name);
         if self.except.iter().any(|e| e == iso) {
             return None;
         }
         match family {
             Family::Component { .. } | Family::Scale if self.components.is_none() => {
-                Some("components")
+                Some(Shorthand::Components)
             }
             Family::Periodic { .. }
                 if self.components.is_none()
                     && per_turn.is_some_and(|k| k <= MAX_COMPONENT_HARMONIC) =>
             {
-                Some("components")
+                Some(Shorthand::Components)
             }
-            Family::Squareness if !self.squareness => Some("squareness"),
-            Family::Location if !self.location => Some("location"),
+            Family::Squareness if !self.squareness => Some(Shorthand::Squareness),
+            Family::Location if !self.location => Some(Shorthand::Location),
             _ => None,
         }
+    }
+
+    /// The spec with `shorthand` set too (`components` at degree 3).
+    pub fn with(mut self, shorthand: Shorthand) -> Self {
+        match shorthand {
+            Shorthand::Components => {
+                self.components.get_or_insert(ComponentSpec { degree: 3 });
+            }
+            Shorthand::Squareness => self.squareness = true,
+            Shorthand::Location => self.location = true,
+        }
+        self
     }
 
     /// The completions of the spec's component errors, each block after the one before: for
@@ -1839,18 +1861,18 @@ mod tests {
         let poly = Family::Component { degree: 3 };
         assert_eq!(
             r_test.would_hold(&poly, "EAZ poly3", None),
-            Some("components")
+            Some(Shorthand::Components)
         );
         let wave = Family::Periodic { period: 1.0 };
         assert_eq!(
             r_test.would_hold(&wave, "EXC periodic", Some(2)),
-            Some("components")
+            Some(Shorthand::Components)
         );
         assert_eq!(r_test.would_hold(&wave, "ECC periodic", Some(40)), None);
         assert_eq!(r_test.would_hold(&wave, "EXX periodic", None), None);
         assert_eq!(
             r_test.would_hold(&Family::Squareness, "EC0Y", None),
-            Some("squareness")
+            Some(Shorthand::Squareness)
         );
         assert_eq!(r_test.would_hold(&Family::Location, "EX0C", None), None);
         assert_eq!(
@@ -1863,6 +1885,10 @@ mod tests {
         assert_eq!(
             serde_json::to_string(&r_test).unwrap(),
             r#"{"location":true}"#
+        );
+        assert_eq!(
+            serde_json::to_string(&r_test.with(Shorthand::Squareness)).unwrap(),
+            r#"{"squareness":true,"location":true}"#
         );
     }
 

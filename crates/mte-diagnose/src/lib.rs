@@ -14,7 +14,7 @@ pub mod term;
 
 pub use candidate::{
     Alternatives, BaseModelSpec, Candidate, ComponentSpec, Reference, Requires, Role, Score,
-    SlotEffect, SlotRole, Spread, SpreadVariants, physical_effects,
+    Shorthand, SlotEffect, SlotRole, Spread, SpreadVariants, physical_effects,
 };
 pub use data::{Observations, Variable, VariableKind};
 pub use engine::{

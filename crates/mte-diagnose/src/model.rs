@@ -192,15 +192,10 @@ fn ordinary_errors_note(
     let mut names = Vec::new();
     let mut fuller = spec.clone();
     for f in &d.findings {
-        match spec.would_hold(&f.family, &f.name, per_turn(f)) {
-            Some("components") => {
-                fuller.components = Some(crate::candidate::ComponentSpec { degree: 3 });
-            }
-            Some("squareness") => fuller.squareness = true,
-            Some(_) => fuller.location = true,
-            None => continue,
+        if let Some(shorthand) = spec.would_hold(&f.family, &f.name, per_turn(f)) {
+            fuller = fuller.with(shorthand);
+            names.push(f.name.as_str());
         }
-        names.push(f.name.as_str());
     }
     if names.is_empty() {
         return None;
