@@ -858,7 +858,7 @@ impl BaseModelSpec {
         // One name per error: the absolute form (`EX0B abs`) is the same error.
         let mut names: Vec<&str> = Vec::new();
         for n in location {
-            let n = n.strip_suffix(" abs").unwrap_or(n);
+            let n = crate::instruments::relative_form(n).unwrap_or(n);
             if !names.contains(&n) {
                 names.push(n);
             }
