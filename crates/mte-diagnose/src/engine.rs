@@ -151,13 +151,29 @@ pub struct Finding {
     pub cv_rms_after: f64,
     /// Other candidates that explain the same residual equally well with this data.
     pub alternatives: Vec<String>,
-    /// The measurement that would tell it apart from the alternatives.
+    /// Other causes that explain the data nearly as well, in other ways: in its place in the
+    /// complete model each leaves χ² higher (or lower) by less than what would exchange the two
+    /// (6.63, χ² 99 % with one degree of freedom): the data hardly tell them apart.
+    pub rivals: Vec<Rival>,
+    /// The measurement that would tell it apart from the alternatives and rivals.
     pub separated_by: Option<String>,
     /// The covariate that exposes it.
     pub exposed_by: Option<String>,
     /// For a linear drift: where the first-order drift of the same parameter would settle (its
     /// time constant did not lower χ² by enough for the data to choose it).
     pub first_order: Option<FirstOrderFit>,
+}
+
+/// A cause that explains the data nearly as well as a finding, in another way ([`Finding::rivals`]).
+#[derive(Debug, Clone, Serialize)]
+pub struct Rival {
+    /// Its name.
+    pub name: String,
+    /// What engineers call it.
+    pub label: String,
+    /// How much higher χ² is with it in the finding's place in the complete model, in units of
+    /// the model's residual variance (negative: lower, by less than would exchange them).
+    pub chi2_excess: f64,
 }
 
 /// Where a drift found linear would settle if it is a first-order one: the first-order drift of
@@ -968,6 +984,7 @@ fn conclude(
             cv_rms_before: c.cv_before,
             cv_rms_after: c.cv_after,
             alternatives: c.alternatives.clone(),
+            rivals: Vec::new(),
             separated_by: c.separated_by.clone(),
             exposed_by: c.term.exposed_by.clone(),
             first_order: None,
@@ -1050,6 +1067,58 @@ fn conclude(
             if let Some(h) = f.hyper_parameter.take() {
                 f.hyper_parameter = Some(h.with_interval(tau));
             }
+        }
+    }
+    // Rivals the data hardly tell from a finding: in its place in the complete model, χ²
+    // within the exchange threshold of the model's.
+    let variance = fit.rss_w() / fit.dof().max(1) as f64;
+    for (k, c) in chosen.iter().enumerate() {
+        let alternatives = &findings[k].alternatives;
+        let mut close: Vec<(&Term, f64)> = c
+            .rivals
+            .iter()
+            .filter(|t| {
+                !chosen.iter().any(|c| c.term.name == t.name)
+                    && !base.iter().any(|b| b.name == t.name)
+                    && !alternatives.contains(&t.name)
+            })
+            .map(|t| {
+                let with_it = rests[k].rss_w() - rests[k].increment(&t.columns).delta_rss;
+                (t, (with_it - fit.rss_w()) / variance)
+            })
+            .filter(|(_, excess)| *excess < EXCHANGE_CHI2)
+            .collect();
+        close.sort_by(|a, b| a.1.total_cmp(&b.1));
+        // Each rival cause once, in the form that fits best.
+        let f = &mut findings[k];
+        let mut kept: Vec<&Term> = Vec::new();
+        for (t, chi2_excess) in close {
+            if kept.iter().any(|k| k.name == t.name || one_cause(k, t)) {
+                continue;
+            }
+            kept.push(t);
+            f.rivals.push(Rival {
+                name: t.name.clone(),
+                label: t.label.clone(),
+                chi2_excess,
+            });
+        }
+        if !f.rivals.is_empty() {
+            // The measurements that would separate the rivals too, beside the alternatives'.
+            let names: Vec<String> = f.rivals.iter().map(|r| r.name.clone()).collect();
+            let mut hints: Vec<String> = (f.separated_by.iter())
+                .flat_map(|h| h.split("; or "))
+                .map(String::from)
+                .collect();
+            for h in separating_hint(&c.term, &names, &searcher.pool.variants)
+                .iter()
+                .flat_map(|h| h.split("; or "))
+            {
+                if !hints.iter().any(|g| g == h) {
+                    hints.push(h.to_string());
+                }
+            }
+            f.separated_by = (!hints.is_empty()).then(|| hints.join("; or "));
         }
     }
     // A drift the data cannot tell from two others together.
@@ -1947,6 +2016,9 @@ struct Chosen {
     cv_before: f64,
     cv_after: f64,
     alternatives: Vec<String>,
+    /// Causes that explained the residuals at its entry nearly as well, in other ways: measured
+    /// again in the complete model ([`Finding::rivals`]). Only in the search on all data.
+    rivals: Vec<Term>,
     separated_by: Option<String>,
 }
 
@@ -2551,6 +2623,37 @@ impl Searcher<'_> {
                 None => (ci, vi, new_cv),
             };
             let alternatives: Vec<String> = alternatives.into_iter().map(|a| a.0).collect();
+            // Rivals: causes that explain the residuals nearly as well in another direction (at
+            // entry within twice the exchange threshold; the complete model decides).
+            let rivals: Vec<Term> = if explain {
+                let share_of = |name: &str| {
+                    ranking
+                        .iter()
+                        .find(|r| r.name == name)
+                        .map_or(0.0, |r| r.share_of_residual)
+                };
+                let share = share_of(&term.name);
+                let dof = projector.dof().saturating_sub(term.width()).max(1);
+                let variance = rss * (1.0 - share) / dof as f64;
+                ranking
+                    .iter()
+                    .filter(|r| {
+                        r.cv_rms.is_some()
+                            && r.name != term.name
+                            && !alternatives.contains(&r.name)
+                            && (share - r.share_of_residual) * rss < 2.0 * EXCHANGE_CHI2 * variance
+                    })
+                    .filter_map(|r| {
+                        scored
+                            .iter()
+                            .find(|s| variants.header(s.0, s.1).name == r.name)
+                    })
+                    .map(|s| variants.term(s.0, s.1))
+                    .filter(|t| !one_cause(t, &term))
+                    .collect()
+            } else {
+                Vec::new()
+            };
             let separated_by = separating_hint(&term, &alternatives, &self.pool.variants);
             let p_value = scored.iter().find(|s| s.0 == ci).map_or(1.0, |s| s.2);
             steps.push(Step {
@@ -2588,6 +2691,7 @@ impl Searcher<'_> {
                 cv_before: cv_rms,
                 cv_after: new_cv,
                 alternatives,
+                rivals,
                 separated_by,
             });
             // Hyper-parameters found with the other effects still in the residuals are biased (an
@@ -2976,6 +3080,8 @@ impl Searcher<'_> {
             let new = projector.residual_part(&trial[j].term.columns);
             let c = &mut trial[j];
             c.alternatives.retain(|a| *a != c.term.name);
+            c.rivals.retain(|r| r.name != c.term.name);
+            c.rivals.push(before.clone());
             if max_cosine(&new, &old) > 0.99 {
                 c.alternatives.insert(0, before.name.clone());
             }
@@ -5016,6 +5122,24 @@ fn separating_hint(chosen: &Term, alternatives: &[String], pool: &[Vec<Term>]) -
     (!hints.is_empty()).then(|| hints.join("; or "))
 }
 
+/// Whether two terms are forms of one cause, not rivals: drifts of one parameter (linear or
+/// first order, whose choice the drift's own statements make), or one error of the same family
+/// (a periodic error at another period, a component error at another degree).
+fn one_cause(a: &Term, b: &Term) -> bool {
+    match (&a.family, &b.family) {
+        (Family::Drift { .. }, Family::Drift { .. }) => {
+            let of_a = crate::candidate::drifted_parameters(a);
+            crate::candidate::drifted_parameters(b)
+                .iter()
+                .any(|p| of_a.contains(p))
+        }
+        (fa, fb) => {
+            std::mem::discriminant(fa) == std::mem::discriminant(fb)
+                && a.name.split(' ').next() == b.name.split(' ').next()
+        }
+    }
+}
+
 /// Whether `name` is the squareness of the same plane as the squareness `t`, in the axis
 /// ISO 230-1 names it by where `t` is not: the later axis of the plane (X, Y, Z order) against
 /// the earlier one — `EC0Y` for `EC0X` (Y against X), `EB0Z` for `EB0X`, `EA0Z` for `EA0Y`.
@@ -5401,6 +5525,7 @@ mod tests {
             cv_rms_before: 1.0,
             cv_rms_after: 0.5,
             alternatives: Vec::new(),
+            rivals: Vec::new(),
             separated_by: None,
             exposed_by: Some("X".into()),
             first_order: None,

@@ -19,7 +19,7 @@ pub use candidate::{
 pub use data::{Observations, Variable, VariableKind};
 pub use engine::{
     Compound, DETECTION_POWER, DetectionLimit, DiagnoseParams, Diagnosis, Exchange, Finding,
-    FirstOrderFit, FitQuality, HeldOut, Outlier, VariantLimit, Verdict, diagnose,
+    FirstOrderFit, FitQuality, HeldOut, Outlier, Rival, VariantLimit, Verdict, diagnose,
 };
 pub use instruments::{load, load_with_noise};
 pub use model::{BaseModelUsed, DriftOf, Effects, ObservationModel, Prepared, prepare};

@@ -187,7 +187,7 @@ pub fn markdown(d: &Diagnosis, title: &str) -> String {
             let qualified = d
                 .findings
                 .iter()
-                .filter(|f| caveat_of(d, &f.name).is_some())
+                .filter(|f| caveat_of(d, &f.name).is_some() || !f.rivals.is_empty())
                 .count();
             let _ = writeln!(
                 s,
@@ -258,6 +258,33 @@ pub fn markdown(d: &Diagnosis, title: &str) -> String {
                     .as_ref()
                     .map(|h| format!(" To separate them: {h}."))
                     .unwrap_or_default()
+            );
+        }
+        if !f.rivals.is_empty() {
+            let rivals: Vec<String> = f
+                .rivals
+                .iter()
+                .map(|r| {
+                    format!(
+                        "{} (χ² {:.1} {} in its place)",
+                        r.name,
+                        r.chi2_excess.abs(),
+                        if r.chi2_excess < 0.0 {
+                            "lower"
+                        } else {
+                            "higher"
+                        }
+                    )
+                })
+                .collect();
+            let _ = writeln!(
+                s,
+                "  These data hardly tell it from: {}; a difference in χ² below 6.6 (99 % for one degree of freedom) does not decide between causes.{}",
+                rivals.join(", "),
+                match (&f.separated_by, f.alternatives.is_empty()) {
+                    (Some(h), true) => format!(" To separate them: {h}."),
+                    _ => String::new(),
+                }
             );
         }
         // A caveat on several findings follows the last of them.
