@@ -1,7 +1,7 @@
 //! `cargo xtask reproduce [seed000|seed002|seed003|seed004|all] [--check]`,
 //! `cargo xtask reproduce seed003 --timing` (writes `docs/reproduction/seed003-timing.md`) and
 //! `cargo xtask bench [-- criterion args]` and
-//! `cargo xtask study [fdr|power|coverage|combined|openworld|all] [--n N] [--n-power M] [--seed S] [--kind axis|tracker|tracker-tools|rtest|rtest-head|points|points-targets|rotary] [--base-model omit] [--out FILE]`.
+//! `cargo xtask study [fdr|power|coverage|combined|openworld|all] [--n N] [--n-power M] [--seed S] [--kind axis|tracker|tracker-tools|rtest|rtest-head|rtest-ac|points|points-targets|rotary] [--base-model omit] [--out FILE]`.
 //!
 //! The generators are in the library target (`xtask::reproduce`), so the staleness test in
 //! `tests/reproduction_up_to_date.rs` runs the very same code.
@@ -30,10 +30,10 @@ macro_rules! out {
 }
 use xtask::reproduce::{self, Freshness, PAPERS};
 
-const USAGE: &str = "usage: cargo xtask <reproduce [seed000|seed002|seed003|seed004|all] [--check] | reproduce seed003 --timing | bench [-- criterion args] | bench-diagnose [--rows N] [--seed S] | study [fdr|power|coverage|combined|openworld|all] [--n N] [--n-power M] [--seed S] [--kind axis|tracker|tracker-tools|rtest|rtest-head|points|points-targets|rotary] [--base-model omit] [--out FILE]>";
+const USAGE: &str = "usage: cargo xtask <reproduce [seed000|seed002|seed003|seed004|all] [--check] | reproduce seed003 --timing | bench [-- criterion args] | bench-diagnose [--rows N] [--seed S] | study [fdr|power|coverage|combined|openworld|all] [--n N] [--n-power M] [--seed S] [--kind axis|tracker|tracker-tools|rtest|rtest-head|rtest-ac|points|points-targets|rotary] [--base-model omit] [--out FILE]>";
 
-/// `cargo xtask realistic <axis|tracker|tracker-tools|rtest|rtest-head|points|points-targets|rotary|c-stage> <seed> <dir> [--hidden EFFECT SIZE]
-/// [--cycles N] [--targets N]`: writes one realistic dataset (every ordinary error) for trying
+/// `cargo xtask realistic <axis|tracker|tracker-tools|rtest|rtest-head|rtest-ac|points|points-targets|rotary|c-stage> <seed> <dir> [--hidden EFFECT SIZE]
+/// [--cycles N] [--targets N] [--wavy]`: writes one realistic dataset (every ordinary error) for trying
 /// `mte diagnose` or timing it; clean unless `--hidden` names a study effect (`pitch`,
 /// `sawtooth`, `risefall`, … in the unit of the studies' tables; its other parameters drawn
 /// from the seed), whose truth is then printed — and written nowhere in the dataset; the
@@ -42,12 +42,13 @@ const USAGE: &str = "usage: cargo xtask <reproduce [seed000|seed002|seed003|seed
 /// once, as the studies' combined cells do (the k-th of one family on the k-th axis), against
 /// the user's model of a real machine.
 /// `--cycles`: R-test measurement cycles; `--targets`: tracker targets (the benches' sizes:
-/// 8 cycles, 400 targets). `c-stage` writes the 3-D points of a C table with a calibrated
+/// 8 cycles, 400 targets); `--wavy`: the false-discovery study's wavier ordinary errors.
+/// `c-stage` writes the 3-D points of a C table with a calibrated
 /// target, the C line's location errors and a scale error of X (the bundled
 /// `fixtures/datasets/c-stage-points/` is seed 1); `points` the studies' realistic ones, every
 /// ordinary error of that machine at once.
 fn run_realistic(args: &[String]) -> Result<(), String> {
-    const USAGE: &str = "usage: cargo xtask realistic <axis|tracker|tracker-tools|rtest|rtest-head|points|points-targets|rotary|c-stage> <seed> <dir> [--hidden EFFECT SIZE] [--cycles N] [--targets N]";
+    const USAGE: &str = "usage: cargo xtask realistic <axis|tracker|tracker-tools|rtest|rtest-head|rtest-ac|points|points-targets|rotary|c-stage> <seed> <dir> [--hidden EFFECT SIZE] [--cycles N] [--targets N] [--wavy]";
     let (positional, options) = args.split_at(args.len().min(3));
     let [kind, seed, dir] = positional else {
         return Err(USAGE.into());
@@ -56,7 +57,7 @@ fn run_realistic(args: &[String]) -> Result<(), String> {
         let v = v.ok_or_else(|| format!("{flag}: expected a number\n{USAGE}"))?;
         v.parse().map_err(|e| format!("{flag} `{v}`: {e}"))
     };
-    let (mut hidden, mut cycles, mut targets) = (Vec::new(), None, None);
+    let (mut hidden, mut cycles, mut targets, mut wavy) = (Vec::new(), None, None, false);
     let mut rest = options.iter();
     while let Some(flag) = rest.next() {
         match flag.as_str() {
@@ -75,6 +76,7 @@ fn run_realistic(args: &[String]) -> Result<(), String> {
             }
             "--cycles" => cycles = Some(count(flag, rest.next())?),
             "--targets" => targets = Some(count(flag, rest.next())?),
+            "--wavy" => wavy = true,
             other => return Err(format!("option `{other}`: unknown\n{USAGE}")),
         }
     }
@@ -108,6 +110,9 @@ fn run_realistic(args: &[String]) -> Result<(), String> {
     }
     spec.cycles = cycles;
     spec.targets = targets;
+    if wavy {
+        spec.waviness = xtask::realistic::smooth::Waviness::Wavy;
+    }
     let truth = xtask::realistic::write_spec(&spec, seed, dir).map_err(|e| e.to_string())?;
     for h in &hidden {
         outln!("hidden: {h:?}");

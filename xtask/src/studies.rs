@@ -132,7 +132,7 @@ pub fn run_one(spec: &Spec, index: usize, seed: u64, work: &Path) -> Record {
             };
         }
     };
-    let prepared = if matches!(spec.kind, Kind::Rtest | Kind::RtestHead) {
+    let prepared = if matches!(spec.kind, Kind::Rtest | Kind::RtestHead | Kind::RtestAc) {
         mte_diagnose::load_with_noise(&truth.manifest, Some(stated_noise(truth.noise_um)))
     } else {
         mte_diagnose::load(&truth.manifest)
@@ -149,7 +149,13 @@ pub fn run_one(spec: &Spec, index: usize, seed: u64, work: &Path) -> Record {
                 .iter()
                 .map(|f| FoundEffect {
                     name: f.name.clone(),
-                    alternatives: f.alternatives.clone(),
+                    // (Those it cannot tell apart and those it hardly can.)
+                    alternatives: f
+                        .alternatives
+                        .iter()
+                        .cloned()
+                        .chain(f.rivals.iter().map(|r| r.name.clone()))
+                        .collect(),
                     period: match f.family {
                         mte_diagnose::Family::Periodic { period } => Some(period),
                         _ => None,
@@ -430,9 +436,10 @@ impl Effect {
             .find(|e| format!("{e:?}").eq_ignore_ascii_case(name))
     }
 
-    /// Display name.
-    pub fn name(self) -> &'static str {
+    /// Display name on datasets of `kind` (the A/C trunnion's tilting axis is A).
+    pub fn name(self, kind: Kind) -> &'static str {
         match self {
+            Effect::PivotDrift if kind == Kind::RtestAc => "thermal drift of EY0A",
             Effect::Pitch => "periodic pitch of X",
             Effect::Reversal => "reversal",
             Effect::RotaryReversal => "reversal of C",
@@ -579,6 +586,16 @@ pub fn power_plan() -> Vec<(Kind, Effect, Vec<f64>)> {
         ),
         (
             Kind::RtestHead,
+            Effect::SpindleDrift,
+            vec![2.0, 5.0, 10.0, 20.0],
+        ),
+        (
+            Kind::RtestAc,
+            Effect::PivotDrift,
+            vec![5.0, 10.0, 20.0, 30.0],
+        ),
+        (
+            Kind::RtestAc,
             Effect::SpindleDrift,
             vec![2.0, 5.0, 10.0, 20.0],
         ),
@@ -1212,7 +1229,7 @@ impl CombinedCell {
                     (Effect::Pitch, 1) => "periodic pitch of Y",
                     (Effect::Pitch, 2) => "periodic pitch of Z",
                     (Effect::PivotDrift, 1) => "thermal drift of EX0C",
-                    _ => e.name(),
+                    _ => e.name(self.kind),
                 };
                 format!("{name} {size} {}", e.unit())
             })
@@ -1302,7 +1319,7 @@ fn power_table(s: &mut String, cells: &[PowerCell]) {
             s,
             "| {} | {} | {} {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |",
             c.kind.name(),
-            c.effect.name(),
+            c.effect.name(c.kind),
             c.size,
             c.effect.unit(),
             c.n,
@@ -1382,8 +1399,9 @@ each a random smooth function of its axis coordinate (random cubic plus two or t
 waves of wavelength ½–2 strokes, scaled to a random size), at realistic sizes (positioning 3–20 µm, \
 straightness 1–8 µm, angular 2–25 µrad, squareness 5–60 µrad; R-test (`rtest`: a B/C trunnion, \
 table–table; `rtest-head`: a B swivel head with a pivot length of 150–350 mm over a C table, \
-head–table, whose B location errors EX0B, EZ0B place the B line against the tool it carries): \
-location errors 5–40 µm and \
+head–table, whose B location errors EX0B, EZ0B place the B line against the tool it carries; \
+`rtest-ac`: an A/C trunnion, A tilting the cradle about X, its pivot drift that of the A line in \
+Y, `EY0A`): location errors 5–40 µm and \
 10–100 µrad, rotary error motions 1–5 µm / 2–20 µrad periodic over a turn, small linear-axis errors; \
 tracker: a three-axis machine measured from 4–6 stations at a grid of 5–7 × 4–5 × 3–4 positions \
 or 60–150 scattered ones, the reflector at the tool tip (`tracker`) or, as a volumetric \
@@ -1507,7 +1525,7 @@ scale → `tracker scale`; drift → `… drift` naming the parameter, e.g. `EX0
 `EZ0[tool] … drift`, `EXX scale drift …` for a thermal expansion; angular \
 positioning of C (a harmonic, a worm gear) → `ECC …` (not a drift, reversal or scale of it) or a C `periodic`/`harmonic` finding; B tilt → `EA0B …`); *else \
 reported as not separable*: no finding names it, but a finding's alternatives the data cannot tell \
-apart do, or — for the tracker's length scale, which the user's model with every axis' scale can \
+apart, or its rivals they hardly tell apart (in its place χ² within 6.63), do, or — for the tracker's length scale, which the user's model with every axis' scale can \
 never separate from a common scale of X, Y and Z — the report's list of what is not separable \
 names it (that list is the same on clean data: it says what the data cannot show, not that the \
 effect was seen); *else period stated out of reach*: neither, and the report's notes say that the \
@@ -1599,7 +1617,7 @@ second effect of one family sits on the next axis: the tracker's second pitch is
 R-test's second pivot drift the C line's (`EX0C`), each with its own period or time constant \
 and sign. *every effect named*: datasets where a finding names each effect \
 (`names_effect`, as in the power table); *effects named*: of all hidden effects; *else \
-reported as not separable*: of the effects not named, those a finding's alternatives name — on \
+reported as not separable*: of the effects not named, those a finding's alternatives or rivals name — on \
 an R-test the lines of B and C drifting together in X are the tool drifting the other way, and \
 the report says which drifts together give the same readings; *else period stated out of reach*: of the effects neither named nor an alternative, those whose \
 period the report says the sampling cannot show (a tracker grid of 5–7 positions along the \
@@ -1658,7 +1676,7 @@ report says that the sampling cannot show the effect's period (as in the power t
                 s,
                 "| {} | {} | {} {} | {} | {} | {} | {} | {} | {} | {} | {} |",
                 o.kind.name(),
-                o.effect.name(),
+                o.effect.name(o.kind),
                 o.size,
                 o.effect.unit(),
                 o.n,

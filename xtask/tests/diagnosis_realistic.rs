@@ -39,6 +39,7 @@ fn clean_realistic_machines_rarely_yield_a_discovery() {
         (Kind::PointsTargets, 2),
         (Kind::Rtest, 4),
         (Kind::RtestHead, 4),
+        (Kind::RtestAc, 4),
     ] {
         let f = studies::fdr(kind, n, SEED);
         assert_eq!(f.errors, 0, "{:?}: {:?}", kind, f.first_error);
@@ -109,14 +110,15 @@ fn hidden_tracker_pitch_names_no_other_cause() {
     );
 }
 
-/// The power cell of `effect` at `size` on both R-test machine types (2 datasets each): every
+/// The power cell of `effect` at `size` on each R-test machine type (B/C and A/C trunnions,
+/// B head over a C table; 2 datasets each): every
 /// effect named, alone, the data explained; `sized` checks the sizes of those named.
-fn named_alone_on_both_machine_types(
+fn named_alone_on_every_machine_type(
     effect: Effect,
     size: f64,
     sized: impl Fn(&studies::PowerCell) -> bool,
 ) {
-    for kind in [Kind::Rtest, Kind::RtestHead] {
+    for kind in [Kind::Rtest, Kind::RtestHead, Kind::RtestAc] {
         let cells = studies::power(kind, effect, &[size], 2, SEED);
         let c = &cells[0];
         assert_eq!(c.errors, 0);
@@ -127,13 +129,14 @@ fn named_alone_on_both_machine_types(
 }
 
 #[test]
-fn a_pivot_drift_is_named_alone_and_sized_on_both_machine_types() {
-    // The B line's place drifts over repeated cycles: on the trunnion against the C line, on
-    // the head–table machine against the tool the head carries (its pivot). The default model
+fn a_pivot_drift_is_named_alone_and_sized_on_every_machine_type() {
+    // The tilting axis' line drifts over repeated cycles: on the trunnions against the C line
+    // (B's in X, A's in Y), on the head–table machine against the tool the head carries (its
+    // pivot). The default model
     // has that location error, so the drift of it is the cause to name, and nothing else: the
     // drift's size must not hide the rotary axes' ordinary higher harmonics until a periodic
     // cause stands in for them, nor leave them as unexplained structure.
-    named_alone_on_both_machine_types(Effect::PivotDrift, 20.0, |c| {
+    named_alone_on_every_machine_type(Effect::PivotDrift, 20.0, |c| {
         c.estimate_within_2u + 1 >= c.named_right
     });
 }
@@ -144,9 +147,9 @@ fn a_spindle_growing_in_z_is_named_alone_and_beside_a_pivot_drift() {
     // the spindle (on the head, turned with B). The R-test re-centres the ball at each set-up,
     // so the growth shows through the ball placed where the tool stood at the centring and
     // through its change during the set-up. Alone it is the tool's place drifting (EZ0[tool]),
-    // on both machine types; with the B line drifting too, each is named (or, on the trunnion,
+    // on every machine type; with the B line drifting too, each is named (or, on the trunnion,
     // said not to be separable from what it is confounded with) and nothing else.
-    named_alone_on_both_machine_types(Effect::SpindleDrift, 10.0, |c| {
+    named_alone_on_every_machine_type(Effect::SpindleDrift, 10.0, |c| {
         c.change_within_2u == Some(c.named_right)
     });
     named_or_inseparable_and_nothing_else(&combined_cell(Kind::Rtest, Effect::SpindleDrift, 4));

@@ -151,6 +151,42 @@ fn b_pivot_offset_gives_the_bk1_pattern() {
 }
 
 #[test]
+fn a_c_trunnion_s_a_line_offset_gives_its_bk1_pattern() {
+    // A perfect A/C trunnion reads zero.
+    let dir = tmp("rtest-ac-zero");
+    let truth = write_spec(&perfect(Kind::RtestAc, &[]), 3, &dir).unwrap();
+    let rows = read_csv(&dir.join("rtest.csv"));
+    assert_eq!(rows.len() * 3, truth.n_observations);
+    assert!(rows.iter().all(|r| r.contains_key("a_deg")));
+    for r in &rows {
+        for k in ["dx_um", "dy_um", "dz_um"] {
+            assert!(num(r, k).abs() <= 1e-9, "{r:?}");
+        }
+    }
+    assert!(truth.ordinary.iter().any(|e| e.iso_name_hint == "EY0A"));
+    // A (sign −1) turns about a line through (0, δ, 0) parallel to X: the ball (centred at
+    // A = 0) moves against the nest by (I − Rot_x(−a))·δŷ = δ·(0, 1 − cos a, sin a), whatever
+    // the ball position and C (ISO 10791-6 BK1 about A, the pattern of EY0A). The generator
+    // holds it as the B/C frame's EX0B = −δ (its module doc).
+    let delta = 0.012;
+    let mut m = BcMachine::perfect(100.0, 150.0);
+    m.ac = true;
+    m.location.ex0b = -delta;
+    for (ball, c_ref) in [
+        (V3::new(0.0, 177.0, 60.0), 0.0),
+        (V3::new(-150.0, 40.0, 120.0), 1.2),
+    ] {
+        let actual = m.centre_ball(ball, c_ref, 0.0);
+        for a_deg in [-90.0_f64, -45.0, 0.0, 30.0, 90.0] {
+            let a = a_deg.to_radians();
+            let r = m.reading(ball, actual, a, c_ref, 0.0);
+            let expected = V3::new(0.0, 1.0 - a.cos(), a.sin()) * delta * 1e3;
+            assert_abs_diff_eq!(r, expected, epsilon = 1e-9);
+        }
+    }
+}
+
+#[test]
 fn perfect_tracker_lengths_are_station_target_distances() {
     let dir = tmp("tracker-zero");
     let truth = write_spec(&perfect(Kind::Tracker, &[]), 4, &dir).unwrap();
@@ -404,7 +440,7 @@ fn generators_are_deterministic_and_hide_the_truth() {
                 harmonic: 36,
                 urad: 5.0,
             }],
-            Kind::Rtest | Kind::RtestHead => vec![Hidden::PivotDrift {
+            Kind::Rtest | Kind::RtestHead | Kind::RtestAc => vec![Hidden::PivotDrift {
                 rotary: 0,
                 um: 10.0,
                 tau_s: 900.0,

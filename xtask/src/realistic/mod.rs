@@ -48,6 +48,9 @@ pub enum Kind {
     /// ISO 10791-6 R-test of a head–table five-axis machine: B swivel head, C table
     /// (`mte-rtest/1`).
     RtestHead,
+    /// ISO 10791-6 R-test of an A/C trunnion (table–table) five-axis machine: A tilts the
+    /// cradle about X and carries the C table (`mte-rtest/1`).
+    RtestAc,
     /// 3-D points of a target on the spindle of a C-table machine with X, Y, Z stages
     /// (`mte-dataset/1`, `"kind": "points"`).
     Points,
@@ -62,18 +65,19 @@ pub enum Kind {
 
 impl Kind {
     /// All kinds.
-    pub const ALL: [Kind; 8] = [
+    pub const ALL: [Kind; 9] = [
         Kind::Axis,
         Kind::Tracker,
         Kind::TrackerTools,
         Kind::Rtest,
         Kind::RtestHead,
+        Kind::RtestAc,
         Kind::Points,
         Kind::PointsTargets,
         Kind::Rotary,
     ];
 
-    /// Lower-case name (`axis`, `tracker`, `tracker-tools`, `rtest`, `rtest-head`, `points`,
+    /// Lower-case name (`axis`, `tracker`, `tracker-tools`, `rtest`, `rtest-head`, `rtest-ac`, `points`,
     /// `points-targets`, `rotary`).
     pub fn name(self) -> &'static str {
         match self {
@@ -82,6 +86,7 @@ impl Kind {
             Kind::TrackerTools => "tracker-tools",
             Kind::Rtest => "rtest",
             Kind::RtestHead => "rtest-head",
+            Kind::RtestAc => "rtest-ac",
             Kind::Points => "points",
             Kind::PointsTargets => "points-targets",
             Kind::Rotary => "rotary",
@@ -413,7 +418,7 @@ pub fn write_spec(spec: &Spec, seed: u64, dir: &Path) -> std::io::Result<Truth> 
     match spec.kind {
         Kind::Axis => axis::write(spec, &mut rng, dir),
         Kind::Tracker | Kind::TrackerTools => tracker::write(spec, &mut rng, dir),
-        Kind::Rtest | Kind::RtestHead => rtest::write(spec, &mut rng, dir),
+        Kind::Rtest | Kind::RtestHead | Kind::RtestAc => rtest::write(spec, &mut rng, dir),
         Kind::Points | Kind::PointsTargets => points::write(spec, &mut rng, dir),
         Kind::Rotary => rotary::write(spec, &mut rng, dir),
     }

@@ -1,4 +1,5 @@
-//! `rtest` datasets: ISO 10791-6 R-test of a B/C trunnion (table–table) five-axis machine.
+//! `rtest` datasets: ISO 10791-6 R-test of a B/C trunnion (table–table) five-axis machine;
+//! `rtest-head`: a B swivel head over a C table; `rtest-ac`: an A/C trunnion.
 //!
 //! Machine type of `fixtures/machines/seed002-bc-trunnion.json` (tool side bed–Y–X–Z–tool,
 //! table side bed–B–C–workpiece, B about Y through the machine origin, C about Z with the table
@@ -14,6 +15,12 @@
 //! carriages' error transforms. A reading is the ball centre (fixed in the workpiece where the
 //! actual tool point was at the setup's centring) minus the nest centre (the tool point), in
 //! machine coordinates, µm.
+//!
+//! The A/C trunnion is the B/C one turned a quarter turn about Z: its table side is
+//! `Q·T_B(a)·T_C(c)·Q⁻¹` with `Q = Rot_z(−90°)` (B/C's x̂ is A/C's −ŷ, its ŷ A/C's x̂), so B about Y
+//! becomes A about X (sign −1) and the B/C location errors become A/C ones: `EY0A = −EX0B`,
+//! `EZ0A = EZ0B`, `EB0A = −EA0B`, `EC0A = EC0B`, `EX0C = EY0C'`, `EY0C = −EX0C'`,
+//! `EA0C = EB0C'`, `EB0C = −EA0C'` (primes: the B/C frame's).
 
 use std::f64::consts::TAU;
 use std::fmt::Write as _;
@@ -142,6 +149,8 @@ pub struct BcMachine {
     /// B swivel head: the B line lies this far above the tool point (pivot length), mm; the
     /// location errors EX0B, EZ0B place the line against the tool, EA0B, EC0B tilt it.
     pub head_pivot_mm: Option<f64>,
+    /// An A/C trunnion: the table side turned a quarter turn about Z (module doc).
+    pub ac: bool,
     /// Tool length, mm.
     pub tool_mm: f64,
     /// Location errors.
@@ -167,6 +176,7 @@ impl BcMachine {
         Self {
             h_c_mm,
             head_pivot_mm: None,
+            ac: false,
             tool_mm,
             location: Location::default(),
             drift: Vec::new(),
@@ -215,7 +225,22 @@ impl BcMachine {
             * rot_z(-c)
             * r_c.inverse()
             * trans(-d_c);
-        t_b * t_c
+        let q = self.quarter_turn();
+        q * t_b * t_c * q.inverse()
+    }
+
+    /// The name of the axis that tilts the table or the head: `A` or `B`.
+    pub fn tilt_axis(&self) -> &'static str {
+        if self.ac { "A" } else { "B" }
+    }
+
+    /// `Q` of the A/C trunnion (module doc), the identity otherwise.
+    fn quarter_turn(&self) -> Iso {
+        if self.ac {
+            rot_z(-std::f64::consts::FRAC_PI_2)
+        } else {
+            Iso::identity()
+        }
     }
 
     /// Tool point (nest centre) in the bed at commanded linear axes (mm), B (rad, the head's)
@@ -259,8 +284,13 @@ impl BcMachine {
                 [p.x + arm * b.sin(), p.y, p.z - arm * (1.0 - b.cos())]
             }
             None => {
-                let p = (rot_y(-b) * trans(V3::new(0.0, 0.0, -self.h_c_mm)) * rot_z(-c))
-                    .transform_point(&ball.into());
+                let q = self.quarter_turn();
+                let p = (q
+                    * rot_y(-b)
+                    * trans(V3::new(0.0, 0.0, -self.h_c_mm))
+                    * rot_z(-c)
+                    * q.inverse())
+                .transform_point(&ball.into());
                 [p.x, p.y, p.z]
             }
         }
@@ -312,17 +342,29 @@ impl BcMachine {
                 "Five-axis machine with a B swivel head and a C table: X, Y, Z on the tool side (bed-Y-X-Z-B-tool), the B head tilts the tool about Y through the pivot above the tool point; C turns the table on the bed (sign -1).",
             )
         } else {
+            let (tilt, direction) = if self.ac {
+                ("A", [1, 0, 0])
+            } else {
+                ("B", [0, 1, 0])
+            };
             bodies.extend([
                 serde_json::json!({"name": "tool", "parent": "Z", "offset_mm": [0.0, 0.0, -arm]}),
-                serde_json::json!({"name": "B", "parent": "bed", "offset_mm": [0, 0, 0],
-                 "joint": {"type": "rotary", "axis": "B", "direction": [0, 1, 0], "sign": -1, "stroke_deg": [-120, 120]}}),
-                serde_json::json!({"name": "C", "parent": "B", "offset_mm": [0.0, 0.0, -self.h_c_mm],
+                serde_json::json!({"name": tilt, "parent": "bed", "offset_mm": [0, 0, 0],
+                 "joint": {"type": "rotary", "axis": tilt, "direction": direction, "sign": -1, "stroke_deg": [-120, 120]}}),
+                serde_json::json!({"name": "C", "parent": tilt, "offset_mm": [0.0, 0.0, -self.h_c_mm],
                  "joint": {"type": "rotary", "axis": "C", "direction": [0, 0, 1], "sign": -1, "stroke_deg": [0, 360]}}),
             ]);
-            (
-                "bc-trunnion",
-                "B/C trunnion five-axis machine: X, Y, Z on the tool side (bed-Y-X-Z-tool), B tilts the cradle about Y through the machine origin and carries the C table; table rotary axes with sign -1.",
-            )
+            if self.ac {
+                (
+                    "ac-trunnion",
+                    "A/C trunnion five-axis machine: X, Y, Z on the tool side (bed-Y-X-Z-tool), A tilts the cradle about X through the machine origin and carries the C table; table rotary axes with sign -1.",
+                )
+            } else {
+                (
+                    "bc-trunnion",
+                    "B/C trunnion five-axis machine: X, Y, Z on the tool side (bed-Y-X-Z-tool), B tilts the cradle about Y through the machine origin and carries the C table; table rotary axes with sign -1.",
+                )
+            }
         };
         bodies
             .push(serde_json::json!({"name": "workpiece", "parent": "C", "offset_mm": [0, 0, 0]}));
@@ -332,10 +374,31 @@ impl BcMachine {
             "description": description,
             "tool": "tool",
             "workpiece": "workpiece",
-            "axis_order": ["X", "Y", "Z", "B", "C"],
+            "axis_order": ["X", "Y", "Z", self.tilt_axis(), "C"],
             "bodies": bodies,
         })
     }
+}
+
+/// A true effect of the B/C trunnion's frame named and signed in the A/C trunnion's (module
+/// doc): its table side turned a quarter turn about Z. Names of the tool side stay.
+fn turned_a_quarter(mut e: TrueEffect) -> TrueEffect {
+    let (name, sign) = match e.iso_name_hint.as_str() {
+        "EX0B" => ("EY0A", -1.0),
+        "EZ0B" => ("EZ0A", 1.0),
+        "EA0B" => ("EB0A", -1.0),
+        "EC0B" => ("EC0A", 1.0),
+        "EBB" => ("EAA", 1.0),
+        "EX0C" => ("EY0C", -1.0),
+        "EY0C" => ("EX0C", 1.0),
+        "EA0C" => ("EB0C", -1.0),
+        "EB0C" => ("EA0C", 1.0),
+        _ => return e,
+    };
+    e.iso_name_hint = name.into();
+    e.size *= sign;
+    e.value *= sign;
+    e
 }
 
 /// Small component errors of the linear axes of the five-axis machine (R-test sees them only
@@ -381,6 +444,7 @@ pub(crate) fn write(spec: &Spec, rng: &mut ChaCha8Rng, dir: &Path) -> std::io::R
         rng.random_range(80.0..=120.0_f64).round(),
         rng.random_range(100.0..=200.0_f64).round(),
     );
+    m.ac = spec.kind == Kind::RtestAc;
     if spec.kind == Kind::RtestHead {
         m.head_pivot_mm = Some(rng.random_range(150.0..=350.0_f64).round());
         // The table surface below the machine origin, which lies at the tool point with Z at 0.
@@ -521,7 +585,16 @@ pub(crate) fn write(spec: &Spec, rng: &mut ChaCha8Rng, dir: &Path) -> std::io::R
         detail: "ordinary (+ hidden)".into(),
         drift: None,
     })
-    .collect();
+    .collect::<Vec<_>>();
+    // The A/C trunnion's names and signs (module doc).
+    let (ordinary, mut effects) = if m.ac {
+        (
+            ordinary.into_iter().map(turned_a_quarter).collect(),
+            effects.into_iter().map(turned_a_quarter).collect(),
+        )
+    } else {
+        (ordinary, effects)
+    };
 
     // Programme: setups (ball positions), BK1 and BK2 per setup, repeated cycles.
     let n_setups = rng.random_range(1..=3);
@@ -558,7 +631,11 @@ pub(crate) fn write(spec: &Spec, rng: &mut ChaCha8Rng, dir: &Path) -> std::io::R
         ));
     }
     let noise = Normal::new(0.0, sigma.max(1e-300)).expect("finite σ");
-    let mut csv = String::from("setup,test,t_s,x_mm,y_mm,z_mm,b_deg,c_deg,dx_um,dy_um,dz_um\n");
+    let tilt = m.tilt_axis();
+    let mut csv = format!(
+        "setup,test,t_s,x_mm,y_mm,z_mm,{}_deg,c_deg,dx_um,dy_um,dz_um\n",
+        tilt.to_lowercase()
+    );
     let mut setups = Vec::new();
     let mut t = 0.0;
     let mut t_last = 0.0;
@@ -572,7 +649,7 @@ pub(crate) fn write(spec: &Spec, rng: &mut ChaCha8Rng, dir: &Path) -> std::io::R
             setups.push(serde_json::json!({
                 "id": id,
                 "ball_mm": [ball.x, ball.y, ball.z],
-                "centring": {"X": q_ref[0], "Y": q_ref[1], "Z": q_ref[2], "B": 0.0, "C": c_deg},
+                "centring": {"X": q_ref[0], "Y": q_ref[1], "Z": q_ref[2], tilt: 0.0, "C": c_deg},
                 "centring_t_s": t,
             }));
             let mut program: Vec<(&str, f64, f64)> = Vec::new();
@@ -611,9 +688,10 @@ pub(crate) fn write(spec: &Spec, rng: &mut ChaCha8Rng, dir: &Path) -> std::io::R
     // The drifts' change from the first reading (t = 0) to the last.
     // (One true effect per hidden one, in order: any other is refused above.)
     for (e, h) in effects.iter_mut().zip(&spec.hidden) {
-        if let Hidden::PivotDrift { um, tau_s, .. } | Hidden::SpindleDrift { um, tau_s, .. } = *h {
+        if let Hidden::PivotDrift { tau_s, .. } | Hidden::SpindleDrift { tau_s, .. } = *h {
+            // The truth's value carries the A/C trunnion's sign (the final drift, signed).
             e.drift = Some(TrueDrift {
-                record_change: um * 1e-3 * (1.0 - (-t_last / tau_s).exp()),
+                record_change: e.value * (1.0 - (-t_last / tau_s).exp()),
                 tau_s,
             });
         }
@@ -629,7 +707,7 @@ pub(crate) fn write(spec: &Spec, rng: &mut ChaCha8Rng, dir: &Path) -> std::io::R
         "instrument": "R-test (three displacement sensors)",
         "note": "simulated",
         "csv": "rtest.csv",
-        "axes": ["X", "Y", "Z", "B", "C"],
+        "axes": ["X", "Y", "Z", tilt, "C"],
         "setups": setups,
     });
     let path = write_manifest(dir, manifest, &spec.base_model)?;
