@@ -2714,13 +2714,25 @@ impl Searcher<'_> {
             base: &base,
             ..*self
         };
-        let exchanged = complete.exchange(&mut chosen, &steps, base_fit, &last.1);
+        let mut exchanged = complete.exchange(&mut chosen, &steps, base_fit, &last.1);
+        let split = complete.split(&mut chosen, base_fit);
+        // The reduction changes what the model says, not how well it fits (χ² within the
+        // exchange threshold), so the outer folds' searches, which only predict, leave it out:
+        // it exchanges every cause again in each smaller model, seconds on an R-test with three
+        // drifts. After a split, what stands in for nothing is the pruning's.
+        let (reduced_by, mut pruned) = if explain && split.is_empty() {
+            complete.reduce(&mut chosen, &steps, base_fit)
+        } else {
+            (Vec::new(), Vec::new())
+        };
+        exchanged.extend(split);
+        exchanged.extend(reduced_by);
         let last = if exchanged.is_empty() {
             last
         } else {
             complete.fit_of(base_fit, &complete.with(&chosen, None))
         };
-        let pruned = complete.prune(&mut chosen, folds, base_fit, last);
+        pruned.extend(complete.prune(&mut chosen, folds, base_fit, last));
         SearchResult {
             completed: late,
             chosen,
@@ -3018,11 +3030,25 @@ impl Searcher<'_> {
             let in_model = |n: &str| {
                 self.base.iter().any(|t| t.name == n) || chosen.iter().any(|c| c.term.name == n)
             };
-            let mut rivals: Vec<usize> = steps
+            // The shortlisted, and the drift of each one's (and this cause's) parameter in the
+            // other form: a rotary axis' line moving with or without what it carries, which a
+            // step's shortlist may leave out when the other form stood ahead of it.
+            let shortlisted: Vec<usize> = steps
                 .iter()
                 .flat_map(|s| &s.ranking)
-                .filter(|r| r.cv_rms.is_some() && !in_model(&r.name))
+                .filter(|r| r.cv_rms.is_some())
                 .filter_map(|r| self.pool.by_name.get(&r.name).copied())
+                .collect();
+            let other_forms: Vec<usize> = shortlisted
+                .iter()
+                .map(|&ci| &pool[ci][0])
+                .chain([&chosen[j].term])
+                .filter_map(|t| self.other_form_of(t))
+                .collect();
+            let mut rivals: Vec<usize> = shortlisted
+                .into_iter()
+                .chain(other_forms)
+                .filter(|&ci| !in_model(&pool[ci][0].name))
                 .filter(|&ci| {
                     let width = pool[ci][0].width();
                     same_family(&pool[ci][0].family, &chosen[j].term.family)
@@ -3085,6 +3111,15 @@ impl Searcher<'_> {
             if max_cosine(&new, &old) > 0.99 {
                 c.alternatives.insert(0, before.name.clone());
             }
+            // What the replaced cause could not be told from, in another form than the one
+            // that took its place (a linear drift's, where a first-order one fits better), the
+            // exchange has told apart.
+            c.alternatives.retain(|a| {
+                self.pool
+                    .by_name
+                    .get(a)
+                    .is_none_or(|&ci| same_form(&pool[ci][0].family, &c.term.family))
+            });
             c.separated_by = separating_hint(&c.term, &c.alternatives, pool);
             exchanged.push(Exchange {
                 replaced: before.name.clone(),
@@ -3095,6 +3130,168 @@ impl Searcher<'_> {
             *chosen = trial;
         }
         exchanged
+    }
+
+    /// Split: with two causes or more, a drift the search chose that two other drifts with its
+    /// time dependence give together ([`equivalent_drifts`]) — the tool drifting where the lines
+    /// of both rotary axes drift the same way — is tried as those two, each then free in its
+    /// own time constant, the other causes chosen again beside them. Two lines drifting with
+    /// time constants of their own first look like the tool drifting (their common part) and
+    /// leave the rest to a cause that stands in for the difference. The split takes the place
+    /// of the drift where it lowers χ² by more than the F test at `alpha` admits for its two
+    /// more parameters (Bonferroni over the splits tried); what then stands in for nothing
+    /// leaves by the pruning. Each of the two is tried in the other form of its parameter too
+    /// (a line moving with or without what it carries: the exact equivalents are of one form,
+    /// the lines' drifts may be the other). Returns the splits made (each as the exchange of
+    /// the drift for the first of the two).
+    fn split(&self, chosen: &mut Vec<Chosen>, base_fit: &Projector) -> Vec<Exchange> {
+        let mut made = Vec::new();
+        if chosen.len() < 2 {
+            return made;
+        }
+        let (_, fit) = self.fit_of(base_fit, &self.with(chosen, None));
+        let splits: Vec<(usize, usize, usize)> = (0..chosen.len())
+            .filter(|&j| chosen[j].term.width() == 1)
+            .flat_map(|j| {
+                let rest = self.fit_without(chosen, j, base_fit);
+                equivalent_drifts(self.obs, &rest, &chosen[j].term, self.candidates)
+                    .into_iter()
+                    .filter_map(|(a, b)| {
+                        let (&a, &b) = (self.pool.by_name.get(&a)?, self.pool.by_name.get(&b)?);
+                        Some((j, a, b))
+                    })
+                    .collect::<Vec<_>>()
+            })
+            .collect();
+        let in_model = |chosen: &[Chosen], ci: usize| {
+            let name = &self.pool.variants[ci][0].name;
+            chosen.iter().any(|c| &c.term.name == name)
+        };
+        let set = |c: &mut Chosen, ci: usize| {
+            (c.term, c.candidate, c.variant, c.component) = (
+                self.pool.term(ci, 0).into_owned(),
+                self.pool.source[ci],
+                0,
+                0,
+            );
+        };
+        // Term `k`'s time constant, the others' beside it, its own again (as an exchange's).
+        let rechoose_around = |trial: &mut Vec<Chosen>, k: &[usize]| {
+            let order = k
+                .iter()
+                .copied()
+                .chain((0..trial.len()).filter(|i| !k.contains(i)))
+                .chain(k.iter().copied());
+            for i in order {
+                self.rechoose(trial, i, base_fit);
+            }
+            self.fit_of(base_fit, &self.with(trial, None)).1.rss_w()
+        };
+        let best = splits
+            .iter()
+            .filter(|&&(_, a, b)| !in_model(chosen, a) && !in_model(chosen, b))
+            .map(|&(j, a, b)| {
+                let mut trial = chosen.clone();
+                let mut second = trial[j].clone();
+                set(&mut trial[j], a);
+                set(&mut second, b);
+                for c in [&mut trial[j], &mut second] {
+                    c.alternatives.clear();
+                    c.rivals.clear();
+                }
+                trial.push(second);
+                let added = trial.len() - 1;
+                let mut rss = rechoose_around(&mut trial, &[j, added]);
+                // Each of the two in the form that fits best.
+                for k in [j, added] {
+                    let Some(ci) = self
+                        .other_form_of(&trial[k].term)
+                        .filter(|&ci| !in_model(&trial, ci))
+                    else {
+                        continue;
+                    };
+                    let mut other = trial.clone();
+                    set(&mut other[k], ci);
+                    let other_rss = rechoose_around(&mut other, &[k]);
+                    if other_rss < rss {
+                        (rss, trial) = (other_rss, other);
+                    }
+                }
+                (rss, j, trial)
+            })
+            .min_by(|a, b| a.0.total_cmp(&b.0));
+        let Some((rss, j, mut trial)) = best else {
+            return made;
+        };
+        let added = trial.len() - 1;
+        let p = f_test(fit.rss_w(), fit.rss_w() - rss, 2, fit.dof()) * splits.len() as f64;
+        if p >= self.params.alpha {
+            return made;
+        }
+        for k in [j, added] {
+            let c = &mut trial[k];
+            c.separated_by = separating_hint(&c.term, &[], &self.pool.variants);
+        }
+        made.push(Exchange {
+            replaced: chosen[j].term.name.clone(),
+            by: trial[j].term.name.clone(),
+            chi2_drop: (fit.rss_w() - rss) / (fit.rss_w() / fit.dof().max(1) as f64),
+        });
+        *chosen = trial;
+        made
+    }
+
+    /// The pool entry of a drift's twin in the other form of its parameter: a rotary axis' line
+    /// moving with or without what it carries (`EX0B abs drift exp` of `EX0B drift exp`).
+    fn other_form_of(&self, t: &Term) -> Option<usize> {
+        let [p] = crate::candidate::drifted_parameters(t)[..] else {
+            return None;
+        };
+        let other = t.name.replacen(p, &crate::instruments::other_form(p), 1);
+        self.pool.by_name.get(&other).copied()
+    }
+
+    /// Reduction: entry by entry, the search may say with three causes what two say as well —
+    /// two lines of a trunnion drifting apart first look like the tool drifting (their common
+    /// part), then need two drifts of one line for the rest. Each cause in turn is taken out
+    /// (with what builds on it) and the others exchanged ([`Searcher::exchange`]) in the
+    /// smaller model; where that leaves χ² higher than the complete model's by less than
+    /// [`EXCHANGE_CHI2`] (in units of its residual variance), the smaller model takes its place
+    /// (the best such, again while three causes or more remain). A cause that leaves without an
+    /// exchange is the pruning's to remove. Exchanges consider the other form of each
+    /// shortlisted drift too, which the shortlist may have left out. Returns the exchanges made
+    /// and the causes removed.
+    fn reduce(
+        &self,
+        chosen: &mut Vec<Chosen>,
+        steps: &[Step],
+        base_fit: &Projector,
+    ) -> (Vec<Exchange>, Vec<String>) {
+        let (mut exchanged, mut removed) = (Vec::new(), Vec::new());
+        while chosen.len() >= 3 {
+            let (_, fit) = self.fit_of(base_fit, &self.with(chosen, None));
+            let limit = fit.rss_w() + EXCHANGE_CHI2 * fit.rss_w() / fit.dof().max(1) as f64;
+            let best = (0..chosen.len())
+                .filter_map(|j| {
+                    let mut trial = chosen.clone();
+                    let gone = self.remove(&mut trial, j, base_fit, true);
+                    let (_, smaller) = self.fit_of(base_fit, &self.with(&trial, None));
+                    let exchanges = self.exchange(&mut trial, steps, base_fit, &smaller);
+                    if exchanges.is_empty() {
+                        return None;
+                    }
+                    let (_, f) = self.fit_of(base_fit, &self.with(&trial, None));
+                    (f.rss_w() < limit).then(|| (f.rss_w(), trial, gone, exchanges))
+                })
+                .min_by(|a, b| a.0.total_cmp(&b.0));
+            let Some((_, trial, gone, exchanges)) = best else {
+                break;
+            };
+            *chosen = trial;
+            removed.extend(gone);
+            exchanged.extend(exchanges);
+        }
+        (exchanged, removed)
     }
 
     /// Chooses the period or time constant of chosen term `j` again, over all its candidate's
@@ -5120,6 +5317,22 @@ fn separating_hint(chosen: &Term, alternatives: &[String], pool: &[Vec<Term>]) -
         }
     }
     (!hints.is_empty()).then(|| hints.join("; or "))
+}
+
+/// Whether two families are one form: of one kind, and for drifts both linear or both first
+/// order.
+fn same_form(a: &Family, b: &Family) -> bool {
+    match (a, b) {
+        (
+            Family::Drift {
+                time_constant_s: ta,
+            },
+            Family::Drift {
+                time_constant_s: tb,
+            },
+        ) => ta.is_some() == tb.is_some(),
+        _ => std::mem::discriminant(a) == std::mem::discriminant(b),
+    }
 }
 
 /// Whether two terms are forms of one cause, not rivals: drifts of one parameter (linear or

@@ -16,7 +16,7 @@ use crate::model::{ObservationModel, Prepared, prepare};
 use crate::{DiagnoseError, Result};
 
 pub use axis::AxisRuns;
-pub(crate) use machine::relative_form;
+pub(crate) use machine::{other_form, relative_form};
 pub use points::Points;
 pub use rtest::RTest;
 pub use tracker::Tracker;

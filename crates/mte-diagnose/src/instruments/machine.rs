@@ -350,6 +350,12 @@ pub(crate) fn relative_form(name: &str) -> Option<&str> {
     name.strip_suffix(ABSOLUTE)
 }
 
+/// A location error's name in the other representation: the relative form of an absolute one
+/// (`EX0B` of `EX0B abs`), the absolute form of a relative one.
+pub(crate) fn other_form(name: &str) -> String {
+    relative_form(name).map_or_else(|| format!("{name}{ABSOLUTE}"), String::from)
+}
+
 /// The body after `body` on its kinematic branch that a location error of `body`'s line can
 /// leave in place: the next rotary axis' body, or on the workpiece branch the workpiece the last
 /// rotary axis carries (no axis moves it). (On the tool branch the body a swivel head carries
