@@ -1141,6 +1141,10 @@ pub fn combined_plan() -> Vec<(Kind, Vec<(Effect, f64)>)> {
             Kind::Rtest,
             vec![(Effect::PivotDrift, 10.0), (Effect::SpindleDrift, 10.0)],
         ),
+        (
+            Kind::RtestAc,
+            vec![(Effect::PivotDrift, 10.0), (Effect::PivotDrift, 10.0)],
+        ),
         // A worn worm drive: its tooth error and its backlash.
         (
             Kind::Rotary,
@@ -1228,6 +1232,9 @@ impl CombinedCell {
                 let name = match (e, of_its_family_before(&self.effects, k)) {
                     (Effect::Pitch, 1) => "periodic pitch of Y",
                     (Effect::Pitch, 2) => "periodic pitch of Z",
+                    (Effect::PivotDrift, 1) if self.kind == Kind::RtestAc => {
+                        "thermal drift of EY0C"
+                    }
                     (Effect::PivotDrift, 1) => "thermal drift of EX0C",
                     _ => e.name(self.kind),
                 };
@@ -1614,7 +1621,7 @@ the stated change).\n"
 Every effect of a cell hidden in each dataset together, on top of the ordinary errors, against \
 the user's model of a real machine (no power cell's `except`: none of these effects is in it). A \
 second effect of one family sits on the next axis: the tracker's second pitch is Y's, the \
-R-test's second pivot drift the C line's (`EX0C`), each with its own period or time constant \
+R-test's second pivot drift the C line's (`EX0C`; on the A/C trunnion the lines drift in Y, `EY0A` and `EY0C`), each with its own period or time constant \
 and sign. *every effect named*: datasets where a finding names each effect \
 (`names_effect`, as in the power table); *effects named*: of all hidden effects; *else \
 reported as not separable*: of the effects not named, those a finding's alternatives or rivals name — on \
