@@ -3066,25 +3066,8 @@ impl Searcher<'_> {
                 .iter()
                 .map(|&ci| {
                     let mut trial = chosen.clone();
-                    let c = &mut trial[j];
-                    (c.term, c.candidate, c.variant, c.component) = (
-                        self.pool.term(ci, 0).into_owned(),
-                        self.pool.source[ci],
-                        0,
-                        0,
-                    );
-                    // Its time constant chosen with the others fitted, then theirs beside it
-                    // (over their grids: the value a cause took beside the one replaced need not
-                    // be near its best now), then its own again.
-                    for k in [j]
-                        .into_iter()
-                        .chain((0..trial.len()).filter(|&k| k != j))
-                        .chain([j])
-                    {
-                        self.rechoose(&mut trial, k, base_fit);
-                    }
-                    let (_, trial_fit) = self.fit_of(base_fit, &self.with(&trial, None));
-                    (trial_fit.rss_w(), trial)
+                    self.take_entry(&mut trial[j], ci);
+                    (self.rechoose_around(&mut trial, &[j], base_fit), trial)
                 })
                 .min_by(|a, b| a.0.total_cmp(&b.0));
             // A rival of as many coefficients must leave χ² lower by more than the threshold; a
@@ -3167,41 +3150,21 @@ impl Searcher<'_> {
             let name = &self.pool.variants[ci][0].name;
             chosen.iter().any(|c| &c.term.name == name)
         };
-        let set = |c: &mut Chosen, ci: usize| {
-            (c.term, c.candidate, c.variant, c.component) = (
-                self.pool.term(ci, 0).into_owned(),
-                self.pool.source[ci],
-                0,
-                0,
-            );
-        };
-        // Term `k`'s time constant, the others' beside it, its own again (as an exchange's).
-        let rechoose_around = |trial: &mut Vec<Chosen>, k: &[usize]| {
-            let order = k
-                .iter()
-                .copied()
-                .chain((0..trial.len()).filter(|i| !k.contains(i)))
-                .chain(k.iter().copied());
-            for i in order {
-                self.rechoose(trial, i, base_fit);
-            }
-            self.fit_of(base_fit, &self.with(trial, None)).1.rss_w()
-        };
         let best = splits
             .iter()
             .filter(|&&(_, a, b)| !in_model(chosen, a) && !in_model(chosen, b))
             .map(|&(j, a, b)| {
                 let mut trial = chosen.clone();
                 let mut second = trial[j].clone();
-                set(&mut trial[j], a);
-                set(&mut second, b);
+                self.take_entry(&mut trial[j], a);
+                self.take_entry(&mut second, b);
                 for c in [&mut trial[j], &mut second] {
                     c.alternatives.clear();
                     c.rivals.clear();
                 }
                 trial.push(second);
                 let added = trial.len() - 1;
-                let mut rss = rechoose_around(&mut trial, &[j, added]);
+                let mut rss = self.rechoose_around(&mut trial, &[j, added], base_fit);
                 // Each of the two in the form that fits best.
                 for k in [j, added] {
                     let Some(ci) = self
@@ -3211,8 +3174,8 @@ impl Searcher<'_> {
                         continue;
                     };
                     let mut other = trial.clone();
-                    set(&mut other[k], ci);
-                    let other_rss = rechoose_around(&mut other, &[k]);
+                    self.take_entry(&mut other[k], ci);
+                    let other_rss = self.rechoose_around(&mut other, &[k], base_fit);
                     if other_rss < rss {
                         (rss, trial) = (other_rss, other);
                     }
@@ -3239,6 +3202,33 @@ impl Searcher<'_> {
         });
         *chosen = trial;
         made
+    }
+
+    /// Chosen term `c` replaced by pool entry `ci` (its first variant; its time constant or
+    /// period to be chosen again).
+    fn take_entry(&self, c: &mut Chosen, ci: usize) {
+        (c.term, c.candidate, c.variant, c.component) = (
+            self.pool.term(ci, 0).into_owned(),
+            self.pool.source[ci],
+            0,
+            0,
+        );
+    }
+
+    /// The time constants or periods of the chosen terms `first` chosen with the others fitted,
+    /// then the others' beside them (over their grids: the value a cause took beside one
+    /// replaced need not be near its best now), then theirs again; returns the weighted RSS of
+    /// the model that results.
+    fn rechoose_around(&self, chosen: &mut [Chosen], first: &[usize], base_fit: &Projector) -> f64 {
+        let order = first
+            .iter()
+            .copied()
+            .chain((0..chosen.len()).filter(|i| !first.contains(i)))
+            .chain(first.iter().copied());
+        for i in order {
+            self.rechoose(chosen, i, base_fit);
+        }
+        self.fit_of(base_fit, &self.with(chosen, None)).1.rss_w()
     }
 
     /// The pool entry of a drift's twin in the other form of its parameter: a rotary axis' line
