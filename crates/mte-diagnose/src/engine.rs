@@ -3121,8 +3121,9 @@ impl Searcher<'_> {
     /// own time constant, the other causes chosen again beside them. Two lines drifting with
     /// time constants of their own first look like the tool drifting (their common part) and
     /// leave the rest to a cause that stands in for the difference. The split takes the place
-    /// of the drift where it lowers χ² by more than the F test at `alpha` admits for its two
-    /// more parameters (Bonferroni over the splits tried); what then stands in for nothing
+    /// of the drift where it lowers χ² — against the drift unsplit, the others' time constants
+    /// chosen again the same way — by more than the F test at `alpha` admits for its two more
+    /// parameters (Bonferroni over the splits tried); what then stands in for nothing
     /// leaves by the pruning. Each of the two is tried in the other form of its parameter too
     /// (a line moving with or without what it carries: the exact equivalents are of one form,
     /// the lines' drifts may be the other). Returns the splits made (each as the exchange of
@@ -3180,14 +3181,17 @@ impl Searcher<'_> {
                         (rss, trial) = (other_rss, other);
                     }
                 }
-                (rss, j, trial)
+                // Against the drift unsplit with the time constants chosen again the same way:
+                // the split must earn its drop, not the others' time constants chosen anew.
+                let unsplit = self.rechoose_around(&mut chosen.clone(), &[j], base_fit);
+                (unsplit, rss, j, trial)
             })
-            .min_by(|a, b| a.0.total_cmp(&b.0));
-        let Some((rss, j, mut trial)) = best else {
+            .max_by(|a, b| (a.0 - a.1).total_cmp(&(b.0 - b.1)));
+        let Some((unsplit, rss, j, mut trial)) = best else {
             return made;
         };
         let added = trial.len() - 1;
-        let p = f_test(fit.rss_w(), fit.rss_w() - rss, 2, fit.dof()) * splits.len() as f64;
+        let p = f_test(unsplit, unsplit - rss, 2, fit.dof()) * splits.len() as f64;
         if p >= self.params.alpha {
             return made;
         }
@@ -3198,7 +3202,7 @@ impl Searcher<'_> {
         made.push(Exchange {
             replaced: chosen[j].term.name.clone(),
             by: trial[j].term.name.clone(),
-            chi2_drop: (fit.rss_w() - rss) / (fit.rss_w() / fit.dof().max(1) as f64),
+            chi2_drop: (unsplit - rss) / (fit.rss_w() / fit.dof().max(1) as f64),
         });
         *chosen = trial;
         made
