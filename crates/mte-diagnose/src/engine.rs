@@ -1071,7 +1071,7 @@ fn conclude(
     }
     // Rivals the data hardly tell from a finding: in its place in the complete model, χ²
     // within the exchange threshold of the model's.
-    let variance = fit.rss_w() / fit.dof().max(1) as f64;
+    let variance = fit.residual_variance();
     for (k, c) in chosen.iter().enumerate() {
         let alternatives = &findings[k].alternatives;
         let mut close: Vec<(&Term, f64)> = c
@@ -3013,7 +3013,7 @@ impl Searcher<'_> {
             |t: &Term| matches!(t.family, Family::Periodic { .. } | Family::Component { .. });
         let same_family =
             |a: &Family, b: &Family| std::mem::discriminant(a) == std::mem::discriminant(b);
-        let variance = fit.rss_w() / fit.dof().max(1) as f64;
+        let variance = fit.residual_variance();
         let pool = &self.pool.variants;
         let mut rss = fit.rss_w();
         for j in 0..chosen.len() {
@@ -3202,7 +3202,7 @@ impl Searcher<'_> {
         made.push(Exchange {
             replaced: chosen[j].term.name.clone(),
             by: trial[j].term.name.clone(),
-            chi2_drop: (unsplit - rss) / (fit.rss_w() / fit.dof().max(1) as f64),
+            chi2_drop: (unsplit - rss) / fit.residual_variance(),
         });
         *chosen = trial;
         made
@@ -3264,7 +3264,7 @@ impl Searcher<'_> {
         let (mut exchanged, mut removed) = (Vec::new(), Vec::new());
         while chosen.len() >= 3 {
             let (_, fit) = self.fit_of(base_fit, &self.with(chosen, None));
-            let limit = fit.rss_w() + EXCHANGE_CHI2 * fit.rss_w() / fit.dof().max(1) as f64;
+            let limit = fit.rss_w() + EXCHANGE_CHI2 * fit.residual_variance();
             let best = (0..chosen.len())
                 .filter_map(|j| {
                     let mut trial = chosen.clone();
@@ -3489,7 +3489,7 @@ impl Searcher<'_> {
             };
             let causes = &terms[self.base.len()..];
             let coef = fit.coefficients(&self.obs.values);
-            let scale = covariance_scale(self.obs, (fit.rss_w() / fit.dof().max(1) as f64).sqrt());
+            let scale = covariance_scale(self.obs, fit.residual_variance().sqrt());
             let mut at: usize = self.base.iter().map(Term::width).sum();
             let (z, held): (Vec<f64>, Vec<Option<Held>>) = causes
                 .iter()
@@ -4400,7 +4400,7 @@ fn drift_courses(
         return exchanged;
     }
     let (_, fit) = searcher.fit_of(base_fit, &searcher.with(chosen, None));
-    let variance = fit.rss_w() / fit.dof().max(1) as f64;
+    let variance = fit.residual_variance();
     let mut rss = fit.rss_w();
     for k in 0..chosen.len() {
         let Some((twin, term)) = drift_twin(searcher.candidates, searcher.obs, &chosen[k], span)

@@ -901,6 +901,12 @@ impl Projector {
         observations.saturating_sub(self.rank())
     }
 
+    /// The residual variance (weighted RSS over its degrees of freedom, at least one): the unit
+    /// of the χ² differences the search compares causes by.
+    pub fn residual_variance(&self) -> f64 {
+        self.rss_w() / self.dof().max(1) as f64
+    }
+
     /// The projector for candidates that are zero outside `rows` (distinct, e.g. one channel's
     /// observations), given on those rows only: the same increments as the full candidate's,
     /// without the zeros. Every row: the projector itself (no copy of a long record's basis).
