@@ -296,6 +296,34 @@ fn run_study(args: &[String]) -> Result<(), String> {
             }
         }
     }
+    if base_model == BaseModel::Default {
+        // The same kinds against the instrument's default base, on an eighth as many datasets
+        // (each takes seconds: the search names the ordinary errors that base leaves out).
+        let (clean, cells) = studies::default_base_plan();
+        if which == "fdr" || which == "all" {
+            for kind in clean.into_iter().filter(|k| kinds.contains(k)) {
+                report.default_base.push(studies::fdr_with(
+                    kind,
+                    n.div_ceil(8),
+                    seed,
+                    &BaseModel::Omit,
+                    xtask::realistic::smooth::Waviness::Gentle,
+                ));
+            }
+        }
+        if which == "power" || which == "all" {
+            for (kind, effect, size) in cells.into_iter().filter(|c| kinds.contains(&c.0)) {
+                report.default_base_power.extend(studies::power_with(
+                    kind,
+                    effect,
+                    &[size],
+                    n_power,
+                    seed,
+                    &BaseModel::Omit,
+                ));
+            }
+        }
+    }
     if which == "power" || which == "all" {
         for (kind, effect, sizes) in studies::power_plan()
             .into_iter()

@@ -33,9 +33,14 @@ pub struct DiagnoseParams {
     pub blocks_per_fold: usize,
     /// Smallest relative fall of the cross-validated RMS for an effect to be kept. Default 0.02.
     pub min_gain: f64,
-    /// Most effects added. Default 10. When the search would have gone on, the diagnosis says
-    /// it is incomplete.
+    /// Most causes added beyond the ordinary errors the base model leaves out. Default 10. When
+    /// the search would have gone on, the diagnosis says it is incomplete.
     pub max_effects: usize,
+    /// Most ordinary errors (component, squareness and location errors, error motions of a
+    /// rotary axis over a turn) added where the base model leaves them out; the search adds
+    /// them before any other cause. Default 40. When the search would have gone on, the
+    /// diagnosis says it is incomplete.
+    pub max_ordinary: usize,
     /// Candidates examined by cross-validation in each step (the most significant ones).
     /// Default 8.
     pub shortlist: usize,
@@ -60,6 +65,7 @@ impl Default for DiagnoseParams {
             blocks_per_fold: 10,
             min_gain: 0.02,
             max_effects: 10,
+            max_ordinary: 40,
             shortlist: 8,
             outer_folds: 5,
             max_memory_gb: 4.0,
@@ -162,6 +168,11 @@ pub struct Finding {
     /// For a linear drift: where the first-order drift of the same parameter would settle (its
     /// time constant did not lower χ² by enough for the data to choose it).
     pub first_order: Option<FirstOrderFit>,
+    /// Whether it is an ordinary error every machine has (a component, squareness or location
+    /// error, an error motion of a rotary axis over a turn: [`crate::Shorthand::of_ordinary`]),
+    /// which the search adds before any drift or periodic error at a free period where the
+    /// base model leaves it out.
+    pub ordinary: bool,
 }
 
 /// A cause that explains the data nearly as well as a finding, in another way ([`Finding::rivals`]).
@@ -988,6 +999,7 @@ fn conclude(
             separated_by: c.separated_by.clone(),
             exposed_by: c.term.exposed_by.clone(),
             first_order: None,
+            ordinary: is_ordinary(obs, &c.term),
         })
         .collect();
     // A drift's size over the data: the change of its parameter from the first reading to the
@@ -1236,11 +1248,18 @@ fn conclude(
             crate::report::p_text(*p)
         )
     });
-    let limit = search.hit_limit.then(|| {
-        format!(
-            "the search stopped at its limit of {} effects while a further candidate was still significant and improved the cross-validated RMS; more causes may remain",
-            params.max_effects
-        )
+    let limit = search.hit_limit.map(|ordinary| {
+        if ordinary {
+            format!(
+                "the search stopped at its limit of {} ordinary errors the base model leaves out while a further one was still significant and improved the cross-validated RMS; more may remain, and the search did not look past them for other causes",
+                params.max_ordinary
+            )
+        } else {
+            format!(
+                "the search stopped at its limit of {} causes while a further candidate was still significant and improved the cross-validated RMS; more causes may remain",
+                params.max_effects
+            )
+        }
     });
     let incomplete = match (limit, capped) {
         (Some(a), Some(b)) => Some(format!("{a}; and {b}")),
@@ -2031,7 +2050,8 @@ struct SearchResult {
     detection_limits: Vec<DetectionLimit>,
     exchanged: Vec<Exchange>,
     pruned: Vec<String>,
-    hit_limit: bool,
+    /// The limit that stopped the search, if one did: `true` for the ordinary errors' one.
+    hit_limit: Option<bool>,
     /// A periodic cause that already had its most components ([`most_periodic_components`])
     /// when the search stopped, yet a further one was significant and improved the
     /// cross-validated RMS: its name, adjusted p-value and that number.
@@ -2295,7 +2315,7 @@ impl Searcher<'_> {
         let mut steps = Vec::new();
         let mut not_separable = Vec::new();
         let mut detection_limits = Vec::new();
-        let mut hit_limit = false;
+        let mut hit_limit = None;
         // Completions that became significant once causes were in: part of the base from then.
         let mut late: Vec<Term> = Vec::new();
         let model_terms = |late: &[Term], chosen: &[Chosen]| -> Vec<Term> {
@@ -2507,17 +2527,30 @@ impl Searcher<'_> {
                 .collect();
             scored.sort_by(|a, b| a.2.total_cmp(&b.2).then(b.3.total_cmp(&a.3)));
             let mut ranking = Vec::new();
-            let mut best: Option<(usize, usize, f64)> = None; // (entry, variant, cv rms)
+            // (entry, variant, cv rms): the best cause, and the best of those that are not a
+            // drift or a periodic error at a free period ([`is_flexible`]), which go first
+            // while an ordinary error the base leaves out earns its place.
+            let mut best: [Option<(usize, usize, f64)>; 2] = [None, None];
+            let mut ordinary_earns = false;
             let mut best_capped: Option<(String, f64, usize)> = None;
-            // The held-out RMS of the significant ones (independent: in parallel).
+            // The held-out RMS of the significant ones (independent: in parallel): the most
+            // significant causes and the most significant of those not flexible.
             // (A capped cause does not take an open one's place: the best of them beside.)
-            let shortlisted: Vec<Scored> = scored
+            let rigid = |s: &Scored| !is_flexible(obs, &variants.header(s.0, s.1));
+            let mut shortlisted: Vec<Scored> = scored
                 .iter()
                 .filter(|s| !capped[s.0])
                 .take(params.shortlist)
+                .copied()
+                .collect();
+            let more: Vec<Scored> = scored
+                .iter()
+                .filter(|s| !capped[s.0] && rigid(s) && !shortlisted.contains(s))
+                .take(params.shortlist - shortlisted.iter().filter(|s| rigid(s)).count())
                 .chain(scored.iter().find(|s| capped[s.0]))
                 .copied()
                 .collect();
+            shortlisted.extend(more);
             let cvs: Vec<Option<f64>> = shortlisted
                 .par_iter()
                 .map(|&(ci, vi, p, _)| {
@@ -2532,21 +2565,26 @@ impl Searcher<'_> {
                         best_capped = Some((t.name.clone(), p, most_periodic_components(obs, &t)));
                     }
                 } else if let Some(r) = cv {
-                    let better = match best {
-                        None => true,
-                        Some((bc, bv, br)) => {
-                            let b_cost = complexity(&variants.header(bc, bv));
-                            let t_cost = complexity(&t);
-                            // Parsimony: within 1 % of the best CV RMS the simpler cause wins.
-                            if (r - br).abs() <= 0.01 * br {
-                                t_cost < b_cost || (t_cost == b_cost && r < br)
-                            } else {
-                                r < br
+                    ordinary_earns |= is_ordinary(obs, &t) && r < cv_rms * (1.0 - params.min_gain);
+                    let tiers = if is_flexible(obs, &t) { 0..1 } else { 0..2 };
+                    for best in &mut best[tiers] {
+                        let better = match *best {
+                            None => true,
+                            Some((bc, bv, br)) => {
+                                let b_cost = complexity(&variants.header(bc, bv));
+                                let t_cost = complexity(&t);
+                                // Parsimony: within 1 % of the best CV RMS the simpler cause
+                                // wins.
+                                if (r - br).abs() <= 0.01 * br {
+                                    t_cost < b_cost || (t_cost == b_cost && r < br)
+                                } else {
+                                    r < br
+                                }
                             }
+                        };
+                        if better {
+                            *best = Some((ci, vi, r));
                         }
-                    };
-                    if better {
-                        best = Some((ci, vi, r));
                     }
                 }
                 ranking.push(CandidateScore {
@@ -2556,7 +2594,19 @@ impl Searcher<'_> {
                     cv_rms: cv,
                 });
             }
-            let accepted = best.filter(|(_, _, r)| *r < cv_rms * (1.0 - params.min_gain));
+            // While an ordinary error the base leaves out earns its place, no drift or periodic
+            // error at a free period goes in: a machine has all the ordinary errors, and while
+            // the model lacks one its shape stands in the residuals, where a flexible cause (a
+            // pitch at any of hundreds of periods, a drift over a single pass) would take it for
+            // its own.
+            let earns = |b: &Option<(usize, usize, f64)>| {
+                b.filter(|(_, _, r)| *r < cv_rms * (1.0 - params.min_gain))
+            };
+            let accepted = if ordinary_earns {
+                earns(&best[1]).or(earns(&best[0]))
+            } else {
+                earns(&best[0])
+            };
             let Some((ci, vi, new_cv)) = accepted else {
                 capped_significant = best_capped;
                 if explain {
@@ -2576,8 +2626,19 @@ impl Searcher<'_> {
                 });
                 break (x, projector.into_owned());
             };
-            if chosen.len() == params.max_effects {
-                hit_limit = true;
+            let ordinary = is_ordinary(obs, &variants.header(ci, vi));
+            let limit = if ordinary {
+                params.max_ordinary
+            } else {
+                params.max_effects
+            };
+            if chosen
+                .iter()
+                .filter(|c| is_ordinary(obs, &c.term) == ordinary)
+                .count()
+                == limit
+            {
+                hit_limit = Some(ordinary);
                 steps.push(Step {
                     ranking,
                     added: None,
@@ -4622,6 +4683,22 @@ fn drift_shapes(
 }
 
 /// Whether the variable that exposes `t` is a rotary axis (its periods are angles).
+/// Whether `t` is an ordinary error every machine has ([`crate::Shorthand::of_ordinary`]): a
+/// component error of an axis, an error motion of a rotary axis over a turn, a squareness, a
+/// location error. The search adds those the base leaves out before any other cause.
+fn is_ordinary(obs: &Observations, t: &Term) -> bool {
+    let per_turn = crate::candidate::per_turn(obs, &t.family, t.exposed_by.as_deref());
+    crate::candidate::Shorthand::of_ordinary(&t.family, per_turn).is_some()
+}
+
+/// Whether `t` is a drift or a periodic error that is not an ordinary error motion over a turn
+/// ([`is_ordinary`]): a cause whose shape the data choose (its period or time constant among
+/// hundreds, its course in time along the order the poses were measured in), which can take
+/// the shape of an ordinary error the model lacks for its own.
+fn is_flexible(obs: &Observations, t: &Term) -> bool {
+    matches!(t.family, Family::Drift { .. } | Family::Periodic { .. }) && !is_ordinary(obs, t)
+}
+
 fn exposed_by_rotary(obs: &Observations, t: &Term) -> bool {
     t.exposed_by
         .as_deref()
@@ -5736,6 +5813,7 @@ mod tests {
             separated_by: None,
             exposed_by: Some("X".into()),
             first_order: None,
+            ordinary: false,
         }
     }
 

@@ -3,8 +3,8 @@
 //! The engine ([`crate::diagnose`]) sees only the result; it knows no instrument.
 
 use crate::candidate::{BaseModelSpec, Candidate, SlotEffect, SlotRole, physical_effects};
-use crate::data::{Observations, VariableKind};
-use crate::term::{Family, Term};
+use crate::data::Observations;
+use crate::term::Term;
 use crate::{DiagnoseError, Result};
 
 /// An instrument's view of a machine, linearised at the nominal machine: what was measured,
@@ -175,24 +175,14 @@ fn ordinary_errors_note(
     spec: &BaseModelSpec,
     d: &crate::Diagnosis,
 ) -> Option<String> {
-    let per_turn = |f: &crate::Finding| {
-        let rotary = f
-            .exposed_by
-            .as_deref()
-            .and_then(|v| obs.variable(v))
-            .is_some_and(|v| v.kind == VariableKind::RotaryAxis);
-        match f.family {
-            Family::Periodic { period } if rotary && period > 0.0 => {
-                let k = std::f64::consts::TAU / period;
-                ((k - k.round()).abs() < 1e-6 * k).then_some(k.round() as usize)
-            }
-            _ => None,
-        }
-    };
     let mut names = Vec::new();
     let mut fuller = spec.clone();
     for f in &d.findings {
-        if let Some(shorthand) = spec.would_hold(&f.family, &f.name, per_turn(f)) {
+        if let Some(shorthand) = spec.would_hold(
+            &f.family,
+            &f.name,
+            crate::candidate::per_turn(obs, &f.family, f.exposed_by.as_deref()),
+        ) {
             fuller = fuller.with(shorthand);
             names.push(f.name.as_str());
         }
@@ -300,6 +290,7 @@ pub fn prepare(
     let mut candidates = physical_effects(&observations, &errors, &drifting);
     candidates.extend(effects.candidates);
     candidates.extend(completions);
+    candidates.extend(spec.cause_completions(&observations, &errors));
     candidates.extend(crate::candidate::interaction_probes(&observations, &errors));
     Ok(Prepared {
         observations,
