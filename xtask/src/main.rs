@@ -297,14 +297,15 @@ fn run_study(args: &[String]) -> Result<(), String> {
         }
     }
     if base_model == BaseModel::Default {
-        // The same kinds against the instrument's default base, on an eighth as many datasets
-        // (each takes seconds: the search names the ordinary errors that base leaves out).
+        // The same kinds against the instrument's default base, on a sixteenth as many
+        // datasets and half as many per power cell (each takes 10–60 s on an R-test: the search
+        // names the ordinary errors that base leaves out, twenty and more).
         let (clean, cells) = studies::default_base_plan();
         if which == "fdr" || which == "all" {
             for kind in clean.into_iter().filter(|k| kinds.contains(k)) {
                 report.default_base.push(studies::fdr_with(
                     kind,
-                    n.div_ceil(8),
+                    n.div_ceil(16),
                     seed,
                     &BaseModel::Omit,
                     xtask::realistic::smooth::Waviness::Gentle,
@@ -317,7 +318,7 @@ fn run_study(args: &[String]) -> Result<(), String> {
                     kind,
                     effect,
                     &[size],
-                    n_power,
+                    n_power.div_ceil(2),
                     seed,
                     &BaseModel::Omit,
                 ));

@@ -1098,7 +1098,7 @@ fn conclude(
                 let with_it = rests[k].rss_w() - rests[k].increment(&t.columns).delta_rss;
                 (t, (with_it - fit.rss_w()) / variance)
             })
-            .filter(|(_, excess)| *excess < EXCHANGE_CHI2)
+            .filter(|(_, excess)| excess.abs() < EXCHANGE_CHI2)
             .collect();
         close.sort_by(|a, b| a.1.total_cmp(&b.1));
         // Each rival cause once, in the form that fits best.
@@ -2326,6 +2326,7 @@ impl Searcher<'_> {
         };
         let mut terms = model_terms(&late, &chosen);
         let mut x = design(&terms.iter().collect::<Vec<_>>(), obs.len());
+        let poses = obs.poses();
         // The base's products with every variant, for this search's weights; the chosen terms'
         // rows are added at each step.
         let products =
@@ -2551,6 +2552,19 @@ impl Searcher<'_> {
                 .copied()
                 .collect();
             shortlisted.extend(more);
+            // A drift must show in the differences between visits of the same pose: over a
+            // single pass, a drift of a time constant fitted to the order the poses were
+            // measured in takes what the model lacks as a function of the pose for its own
+            // (a drift of EB0Z on a clean R-test against its location-only default).
+            shortlisted.retain(|&(ci, vi, _, _)| {
+                !matches!(variants.header(ci, vi).family, Family::Drift { .. })
+                    || projector
+                        .within_poses(&variants.columns(ci, vi), &poses)
+                        .is_some_and(|(rss, explained, dof)| {
+                            f_test(rss, explained, variants.header(ci, vi).width(), dof)
+                                < params.alpha
+                        })
+            });
             let cvs: Vec<Option<f64>> = shortlisted
                 .par_iter()
                 .map(|&(ci, vi, p, _)| {

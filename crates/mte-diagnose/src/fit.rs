@@ -940,6 +940,48 @@ impl Projector {
         self.q.columns(r, self.q.ncols() - r).into_owned()
     }
 
+    /// What `c` explains of the differences between visits of the same pose alone: the
+    /// whitened residuals and `c` (whitened, the model projected out) less their means over
+    /// each pose of `poses` (a pose index per observation; a pose measured once drops out).
+    /// Whatever the model lacks as a function of the pose is constant over a pose's visits and
+    /// drops out too: only an effect of time shows there. Returns the residual sum of squares
+    /// within the poses, the part of it `c` explains, and its degrees of freedom (the repeat
+    /// visits); `None` where fewer than two would remain beside `c`.
+    pub fn within_poses(&self, c: &DMat, poses: &[usize]) -> Option<(f64, f64, usize)> {
+        let groups = poses.iter().max().map_or(0, |&m| m + 1);
+        let mut count = vec![0usize; groups];
+        for &p in poses {
+            count[p] += 1;
+        }
+        let demeaned = |v: DVec| -> DVec {
+            let mut sum = vec![0.0; groups];
+            for (&p, x) in poses.iter().zip(v.iter()) {
+                sum[p] += x;
+            }
+            DVec::from_fn(v.len(), |i, _| {
+                v[i] - sum[poses[i]] / count[poses[i]] as f64
+            })
+        };
+        let cw = self.residual_part(c);
+        let x = DMat::from_columns(
+            &cw.column_iter()
+                .map(|col| demeaned(col.into_owned()))
+                .collect::<Vec<_>>(),
+        );
+        let r = demeaned(self.rw.clone());
+        let repeats: usize = count.iter().filter(|&&k| k > 1).map(|&k| k - 1).sum();
+        if repeats < c.ncols() + 2 {
+            return None;
+        }
+        let b = x.tr_mul(&r);
+        let explained = x
+            .tr_mul(&x)
+            .pseudo_inverse(1e-12)
+            .ok()
+            .map_or(0.0, |g| b.dot(&(g * &b)));
+        Some((r.norm_squared(), explained, repeats))
+    }
+
     /// Whitened `c` with the current model projected out.
     pub fn residual_part(&self, c: &DMat) -> DMat {
         let mut cw = c.clone();
