@@ -306,6 +306,20 @@ pub struct FdrSummary {
 }
 
 impl FdrSummary {
+    /// The table cells of σ0's quantiles and of the median held-out RMS ÷ σ, base → diagnosed.
+    fn fit_cells(&self) -> (String, String) {
+        let q = self.sigma0.map_or("–".into(), |q| {
+            format!(
+                "{:.2} / {:.2} / {:.2} / {:.2} / {:.2}",
+                q[0], q[1], q[2], q[3], q[4]
+            )
+        });
+        let h = self
+            .held_out_over_noise
+            .map_or("–".into(), |(a, b)| format!("{a:.2} → {b:.2}"));
+        (q, h)
+    }
+
     /// Fraction of the datasets that ran with at least one finding.
     pub fn fraction(&self) -> f64 {
         let ran = self.n - self.errors;
@@ -1388,15 +1402,7 @@ the ordinary errors found as other findings.\n\n\
 | kind | datasets | errors | with a finding | with a finding other than an ordinary error | of which every such finding qualified | verdict \"explained\" | most frequent findings other than ordinary errors | σ0 (min / 10 % / median / 90 % / max) | held-out RMS ÷ σ, base → diagnosed (median) |\n|---|---|---|---|---|---|---|---|---|---|"
     );
     for f in &r.default_base {
-        let q = f.sigma0.map_or("–".into(), |q| {
-            format!(
-                "{:.2} / {:.2} / {:.2} / {:.2} / {:.2}",
-                q[0], q[1], q[2], q[3], q[4]
-            )
-        });
-        let h = f
-            .held_out_over_noise
-            .map_or("–".into(), |(a, b)| format!("{a:.2} → {b:.2}"));
+        let (q, h) = f.fit_cells();
         let ran = f.n - f.errors;
         let _ = writeln!(
             s,
@@ -1590,15 +1596,7 @@ each finding so (no confident name).\n\n\
 | kind | datasets | errors | with a finding | of which every finding qualified | verdict \"no significant discrepancy\" | with a reading listed as an outlier | most frequent findings | σ0 (min / 10 % / median / 90 % / max) | held-out RMS ÷ σ, base → diagnosed (median) |\n|---|---|---|---|---|---|---|---|---|---|"
         );
         for f in &r.fdr {
-            let q = f.sigma0.map_or("–".into(), |q| {
-                format!(
-                    "{:.2} / {:.2} / {:.2} / {:.2} / {:.2}",
-                    q[0], q[1], q[2], q[3], q[4]
-                )
-            });
-            let h = f
-                .held_out_over_noise
-                .map_or("–".into(), |(a, b)| format!("{a:.2} → {b:.2}"));
+            let (q, h) = f.fit_cells();
             let _ = writeln!(
                 s,
                 "| {}{} | {} | {} | {} | {} | {} | {} | {} | {q} | {h} |",
