@@ -38,8 +38,8 @@ pub struct DiagnoseParams {
     pub max_effects: usize,
     /// Most ordinary errors (component, squareness and location errors, error motions of a
     /// rotary axis over a turn) added where the base model leaves them out; the search adds
-    /// them before any other cause. Default 40. When the search would have gone on, the
-    /// diagnosis says it is incomplete.
+    /// them before any drift or periodic error at a free period. Default 40. When the search
+    /// would have gone on, the diagnosis says it is incomplete.
     pub max_ordinary: usize,
     /// Candidates examined by cross-validation in each step (the most significant ones).
     /// Default 8.
@@ -4699,7 +4699,8 @@ fn drift_shapes(
 /// Whether the variable that exposes `t` is a rotary axis (its periods are angles).
 /// Whether `t` is an ordinary error every machine has ([`crate::Shorthand::of_ordinary`]): a
 /// component error of an axis, an error motion of a rotary axis over a turn, a squareness, a
-/// location error. The search adds those the base leaves out before any other cause.
+/// location error. The search adds those the base leaves out before any drift or periodic
+/// error at a free period ([`is_flexible`]).
 fn is_ordinary(obs: &Observations, t: &Term) -> bool {
     let per_turn = crate::candidate::per_turn(obs, &t.family, t.exposed_by.as_deref());
     crate::candidate::Shorthand::of_ordinary(&t.family, per_turn).is_some()
