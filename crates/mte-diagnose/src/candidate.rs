@@ -666,6 +666,13 @@ impl Shorthand {
     }
 }
 
+/// Whether the variable `exposed_by` is a rotary axis of `obs`.
+pub(crate) fn is_rotary(obs: &Observations, exposed_by: Option<&str>) -> bool {
+    exposed_by
+        .and_then(|v| obs.variable(v))
+        .is_some_and(|v| v.kind == VariableKind::RotaryAxis)
+}
+
 /// The whole number of cycles per turn of a periodic effect of family `family` along the
 /// variable `exposed_by`, where that is a rotary axis and the period divides a turn.
 pub(crate) fn per_turn(
@@ -673,11 +680,8 @@ pub(crate) fn per_turn(
     family: &Family,
     exposed_by: Option<&str>,
 ) -> Option<usize> {
-    let rotary = exposed_by
-        .and_then(|v| obs.variable(v))
-        .is_some_and(|v| v.kind == VariableKind::RotaryAxis);
     match *family {
-        Family::Periodic { period } if rotary && period > 0.0 => {
+        Family::Periodic { period } if is_rotary(obs, exposed_by) && period > 0.0 => {
             let k = std::f64::consts::TAU / period;
             ((k - k.round()).abs() < 1e-6 * k).then_some(k.round() as usize)
         }
@@ -1250,13 +1254,13 @@ pub const MAX_COMPONENT_HARMONIC: usize = 6;
 
 /// The completions of a linear axis' component error `slot` beyond degree `hi`
 /// ([`BaseModelSpec::completions`]): its higher orders in blocks, each after the one before, and
-/// all of them at once. `first`: the term the first block and the span build on (`None`: the
-/// base's own error).
+/// for the base's own error (`builds_on` `None`) all of them at once. `builds_on`: the cause the
+/// first block builds on.
 fn linear_completions(
     obs: &Observations,
     slot: &SlotEffect,
     hi: usize,
-    first: Option<String>,
+    builds_on: Option<String>,
 ) -> Vec<Box<dyn Candidate>> {
     let mut out: Vec<Box<dyn Candidate>> = Vec::new();
     // All the orders beyond the base's at once, up to a higher degree where the axis
@@ -1266,7 +1270,7 @@ fn linear_completions(
     // held-out blocks leave out ranges of the linear axes, a polynomial of degree 15 in Z
     // predicted them hundreds of µm off, and no cause after it could earn its place.)
     let top = highest_completion_degree(obs, slot);
-    if first.is_none()
+    if builds_on.is_none()
         && hi + COMPLETION_BLOCK < top
         && let Some(cols) = component_columns(obs, slot, hi + 1, top)
     {
@@ -1274,13 +1278,13 @@ fn linear_completions(
         let what = format!("degrees {} to {top} together", hi + 1);
         out.push(Box::new(Completion {
             term: component_term(slot, name, &what, cols),
-            after: first.clone(),
+            after: None,
             span: true,
         }));
     }
     // Orders in blocks: a smooth error's remainder spreads over several orders, which
     // one at a time would not reveal.
-    let mut after = first;
+    let mut after = builds_on;
     for first in (hi + 1..=MAX_COMPONENT_DEGREE).step_by(COMPLETION_BLOCK) {
         let last = (first + COMPLETION_BLOCK - 1)
             .min(MAX_COMPONENT_DEGREE)

@@ -4715,10 +4715,7 @@ fn is_flexible(obs: &Observations, t: &Term) -> bool {
 }
 
 fn exposed_by_rotary(obs: &Observations, t: &Term) -> bool {
-    t.exposed_by
-        .as_deref()
-        .and_then(|v| obs.variable(v))
-        .is_some_and(|v| v.kind == crate::VariableKind::RotaryAxis)
+    crate::candidate::is_rotary(obs, t.exposed_by.as_deref())
 }
 
 /// The period or time constant of a term, with the quantity it is reported in (a period along a
