@@ -289,7 +289,8 @@ pub struct FdrSummary {
     /// Datasets with a finding that is not an ordinary error ([`FoundEffect::ordinary`]): what
     /// counts as a false discovery against a base model that leaves ordinary errors out.
     pub with_other: usize,
-    /// Of those, datasets where the report qualifies every such finding.
+    /// Of those, datasets where the report qualifies every such finding or lists what the
+    /// data cannot tell it from ([`FoundEffect::alternatives`]).
     pub other_qualified: usize,
     /// Names of the findings that are not ordinary errors, by frequency.
     pub other_names: Vec<(String, usize)>,
@@ -396,7 +397,8 @@ pub fn fdr_with(
             .iter()
             .filter(|(_, o)| {
                 let mut other = o.findings.iter().filter(|f| !f.ordinary).peekable();
-                other.peek().is_some() && other.all(|f| o.qualified.contains(&f.name))
+                other.peek().is_some()
+                    && other.all(|f| o.qualified.contains(&f.name) || !f.alternatives.is_empty())
             })
             .count(),
         other_names: name_counts(ok.iter().flat_map(|(_, o)| {
@@ -690,6 +692,7 @@ pub fn default_base_plan() -> (Vec<Kind>, Vec<(Kind, Effect, f64)>) {
         vec![
             (Kind::Rtest, Effect::PivotDrift, 10.0),
             (Kind::RtestHead, Effect::SpindleDrift, 10.0),
+            (Kind::Tracker, Effect::TrackerScale, 5.0),
         ],
     )
 }
@@ -1393,12 +1396,15 @@ a free period goes in, which would otherwise take the shape of a missing ordinar
 its own (a pitch of Y at a period of 1.17 mm, a drift of EA0C over a single cycle, both on \
 clean machines), and a drift must show in the differences between visits of the same pose. *with a finding other than an ordinary error*: a false discovery on a clean \
 machine; *of which every such finding qualified*: the report says of each that its period \
-and shape are not determined, or that it is one effect of a form no candidate has; \
+and shape are not determined, or that it is one effect of a form no candidate has, or it lists \
+what these data cannot tell the finding from; \
 *verdict \"explained\"*: the causes found leave residuals consistent with the noise (the rest \
 say that structure remains: the polynomials of degree 3 and the first harmonics do not hold \
-all of a machine's smooth errors). On clean tracker data the tracker's length scale named is \
-the common part of the axes' scale errors, which lengths cannot tell from it; against the \
-stations-only base the report does not yet say so. The power cells below put the effect on the same machines \
+all of a machine's smooth errors). On clean tracker data a tracker's length scale named is \
+the common part of the axes' scale errors, which lengths cannot tell from it: the report lists \
+with it the axes' scales the model lacks, together (an identity of the geometry, not a near \
+miss of the data: with the stations free, lengths too long in proportion are a common scale of \
+X, Y and Z). The power cells below put the effect on the same machines \
 as the power table's cells of that effect and size; *named alone, explained* there counts \
 the ordinary errors found as other findings.\n\n\
 | kind | datasets | errors | with a finding | with a finding other than an ordinary error | of which every such finding qualified | verdict \"explained\" | most frequent findings other than ordinary errors | σ0 (min / 10 % / median / 90 % / max) | held-out RMS ÷ σ, base → diagnosed (median) |\n|---|---|---|---|---|---|---|---|---|---|"

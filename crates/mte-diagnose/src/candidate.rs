@@ -960,10 +960,12 @@ impl BaseModelSpec {
     }
 
     /// The completions of the component errors of linear axes the spec leaves out, for when the
-    /// search finds one as a cause (a cubic, `… poly3`): its higher orders, as
-    /// [`BaseModelSpec::completions`] completes the base's. A real component error is a smooth
-    /// function, not a cubic; without its higher orders the rest of it stays in the residuals,
-    /// where a periodic error at a free period would take it for its own.
+    /// search finds one as a cause (`… poly1` to `… poly3`): its higher orders, as
+    /// [`BaseModelSpec::completions`] completes the base's, in blocks after the degree found. A
+    /// real component error is a smooth function, not a polynomial of the degree that was
+    /// significant first (a wave of half the stroke has no cubic part to speak of); without its
+    /// higher orders the rest of it stays in the residuals, where a periodic error at a free
+    /// period would take it for its own.
     pub fn cause_completions(
         &self,
         obs: &Observations,
@@ -975,14 +977,22 @@ impl BaseModelSpec {
         slots
             .par_iter()
             .filter(|slot| !held(slot) && slot.column.iter().any(|v| v.abs() >= 1e-15))
-            .filter_map(|slot| {
-                let (_, hi, rotary) = component_orders(obs, slot, CAUSE_DEGREE)?;
-                (!rotary && hi == CAUSE_DEGREE).then(|| {
-                    let cause = format!("{} poly{CAUSE_DEGREE}", slot.name);
-                    linear_completions(obs, slot, hi, Some(cause))
-                })
+            .flat_map_iter(|slot| {
+                let orders = component_orders(obs, slot, CAUSE_DEGREE)
+                    .filter(|&(_, hi, rotary)| !rotary && hi == CAUSE_DEGREE);
+                // The causes' lowest degree: a positioning error's linear part is its scale.
+                let first = match &slot.role {
+                    SlotRole::Component { positioning, .. } if *positioning => 2,
+                    _ => orders.map_or(1, |o| o.0),
+                };
+                orders
+                    .into_iter()
+                    .flat_map(move |(_, hi, _)| first..=hi)
+                    .flat_map(|degree| {
+                        let cause = format!("{} poly{degree}", slot.name);
+                        linear_completions(obs, slot, degree, Some(cause))
+                    })
             })
-            .flatten()
             .collect()
     }
 

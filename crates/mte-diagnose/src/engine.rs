@@ -1133,13 +1133,21 @@ fn conclude(
             f.separated_by = (!hints.is_empty()).then(|| hints.join("; or "));
         }
     }
-    // A drift the data cannot tell from two others together.
+    // A drift the data cannot tell from two others together; a constant error from two or
+    // three others together.
+    let in_model = |name: &str| {
+        chosen.iter().any(|c| c.term.name == name) || base.iter().any(|b| b.name == name)
+    };
+    let singles = single_constants(obs, candidates);
     for (k, c) in chosen.iter().enumerate() {
         findings[k].alternatives.extend(
             equivalent_drifts(obs, &rests[k], &c.term, candidates)
                 .into_iter()
                 .map(|(a, b)| format!("{a} and {b} together (same time dependence)")),
         );
+        findings[k].alternatives.extend(equivalent_constants(
+            &rests[k], &c.term, &singles, &in_model,
+        ));
     }
     // A period the positions cannot pin down: other periods that fit about as well widen the
     // amplitude's uncertainty and are named. (A long record samples densely: not needed there.)
@@ -4183,20 +4191,18 @@ fn outlying_readings(
     out
 }
 
-/// Share of a drift's own effect (what the rest of the final model does not hold) that two other
-/// drifts together may leave for the three to give the same readings: an identity of the
+/// Share of a finding's own effect (what the rest of the final model does not hold) that other
+/// causes together may leave for them all to give the same readings: an identity of the
 /// machine's geometry on these poses, not a near miss of the data.
-const EQUIVALENT_DRIFT_SHARE: f64 = 1e-9;
+const EQUIVALENT_SHARE: f64 = 1e-9;
 
-/// Most pairs of drifts [`equivalent_drifts`] names.
-const EQUIVALENT_PAIRS: usize = 3;
+/// Most sets of causes [`equivalent_sets`] names.
+const EQUIVALENT_SETS: usize = 3;
 
 /// Pairs of drifts of other parameters, with the same time dependence, that together give the
-/// readings the drift finding `term` gives: beyond the rest of the final model (its fit
-/// `rest`), all but [`EQUIVALENT_DRIFT_SHARE`] of its effect is theirs, and neither alone holds
-/// it. On an R-test the ball sees only the tool relative to the table: the lines of both rotary
-/// axes drifting together in X are the tool drifting the other way. The pairs' names, in the
-/// library's order, at most [`EQUIVALENT_PAIRS`].
+/// readings the drift finding `term` gives ([`equivalent_sets`]). On an R-test the ball sees
+/// only the tool relative to the table: the lines of both rotary axes drifting together in X
+/// are the tool drifting the other way. The pairs' names, in the library's order.
 fn equivalent_drifts(
     obs: &Observations,
     rest: &Projector,
@@ -4205,10 +4211,6 @@ fn equivalent_drifts(
 ) -> Vec<(String, String)> {
     let Family::Drift { time_constant_s } = term.family else {
         return Vec::new();
-    };
-    let same_form = |t: &Term| {
-        t.name != term.name
-            && matches!(t.family, Family::Drift { time_constant_s: tc } if tc == time_constant_s)
     };
     // Every other drift cause with the finding's time dependence.
     let others: Vec<Term> = candidates
@@ -4220,44 +4222,138 @@ fn equivalent_drifts(
                 .then(|| c.variants(obs).pop())
                 .flatten(),
         })
-        .filter(|t| t.width() == 1 && same_form(t))
+        .filter(|t| {
+            t.name != term.name
+                && matches!(t.family, Family::Drift { time_constant_s: tc } if tc == time_constant_s)
+        })
         .collect();
-    if others.len() < 2 || term.width() != 1 {
+    equivalent_sets(rest, term, &others.iter().collect::<Vec<_>>(), 2)
+        .into_iter()
+        .map(|set| (others[set[0]].name.clone(), others[set[1]].name.clone()))
+        .collect()
+}
+
+/// The causes constant in time of one shape and one column among `candidates`: what
+/// [`equivalent_constants`] combines.
+fn single_constants(obs: &Observations, candidates: &[Box<dyn Candidate>]) -> Vec<Term> {
+    candidates
+        .iter()
+        .filter(|c| c.role() == Role::Cause && c.requires().is_none() && c.columns(obs) == 1)
+        .filter_map(|c| c.variants(obs).pop())
+        .filter(constant_in_time)
+        .collect()
+}
+
+/// Whether a term's effect does not change in time nor with a period the data choose.
+fn constant_in_time(t: &Term) -> bool {
+    !matches!(
+        t.family,
+        Family::Drift { .. } | Family::Periodic { .. } | Family::Base
+    )
+}
+
+/// Sets of two or three of the causes `singles` ([`single_constants`]) outside the final model
+/// (`in_model`), that together give the readings the constant finding `term` gives
+/// ([`equivalent_sets`]; pairs, or triples where no pair does): from tracker lengths with the
+/// stations free, the tracker's length scale is a common scale error of X, Y and Z,
+/// `EXX scale`, `EYY scale` and `EZZ scale` alike. Each set's names joined, in the library's
+/// order.
+fn equivalent_constants(
+    rest: &Projector,
+    term: &Term,
+    singles: &[Term],
+    in_model: &dyn Fn(&str) -> bool,
+) -> Vec<String> {
+    if !constant_in_time(term) || term.width() != 1 {
         return Vec::new();
     }
-    let mut d = DMat::zeros(obs.len(), others.len() + 1);
-    d.set_column(0, &term.columns.column(0));
-    for (k, t) in others.iter().enumerate() {
-        d.set_column(k + 1, &t.columns.column(0));
+    let others: Vec<&Term> = singles
+        .iter()
+        .filter(|t| t.name != term.name && !in_model(&t.name))
+        .collect();
+    let mut sets = equivalent_sets(rest, term, &others, 2);
+    if sets.is_empty() {
+        sets = equivalent_sets(rest, term, &others, 3);
     }
-    // Beyond the rest of the model: the finding's effect (column 0) and each other drift's.
+    sets.into_iter()
+        .map(|set| {
+            let names: Vec<&str> = set.iter().map(|&i| others[i].name.as_str()).collect();
+            let (last, first) = names.split_last().expect("a set has two or three");
+            format!("{} and {last} together", first.join(", "))
+        })
+        .collect()
+}
+
+/// Sets of exactly `size` (2 or 3) of the single-column terms `others` that together give the
+/// readings the single-column finding `term` gives: beyond the rest of the final model (its fit
+/// `rest`), all but [`EQUIVALENT_SHARE`] of the finding's effect is theirs, and no smaller part
+/// of a set holds it. The sets as indices into `others`, in their order, at most
+/// [`EQUIVALENT_SETS`].
+fn equivalent_sets(
+    rest: &Projector,
+    term: &Term,
+    others: &[&Term],
+    size: usize,
+) -> Vec<Vec<usize>> {
+    let usable: Vec<usize> = (0..others.len())
+        .filter(|&i| others[i].width() == 1)
+        .collect();
+    if usable.len() < size || term.width() != 1 || !(2..=3).contains(&size) {
+        return Vec::new();
+    }
+    let mut d = DMat::zeros(term.columns.nrows(), usable.len() + 1);
+    d.set_column(0, &term.columns.column(0));
+    for (k, &i) in usable.iter().enumerate() {
+        d.set_column(k + 1, &others[i].columns.column(0));
+    }
+    // Beyond the rest of the model: the finding's effect (column 0) and each other's.
     let r = rest.residual_part(&d);
-    let g = crate::fit::tr_mul(&r, &r);
+    let g = tr_mul(&r, &r);
     let own = g[(0, 0)];
     if own <= 0.0 {
         return Vec::new();
     }
-    let tolerance = EQUIVALENT_DRIFT_SHARE * own;
-    // What is left of the finding's effect after the best multiple of `a`, of `a` and `b`.
-    let left_by_one = |a: usize| own - g[(a, 0)].powi(2) / g[(a, a)].max(1e-300);
-    let left_by_two = |a: usize, b: usize| {
-        let det = g[(a, a)] * g[(b, b)] - g[(a, b)].powi(2);
-        if det <= 1e-12 * g[(a, a)] * g[(b, b)] {
+    let tolerance = EQUIVALENT_SHARE * own;
+    // What is left of the finding's effect after the best combination of a set of design
+    // columns; a set whose columns are nearly dependent beyond the rest holds nothing (its
+    // combination would carry rounding far above the share asked for).
+    let left = |set: &[usize]| {
+        let k = set.len();
+        let gs = DMat::from_fn(k, k, |i, j| g[(set[i], set[j])]);
+        let gv = DVec::from_fn(k, |i, _| g[(set[i], 0)]);
+        let scale: f64 = set.iter().map(|&a| g[(a, a)]).product();
+        if gs.determinant() <= 1e-6 * scale {
             return own;
         }
-        let ca = (g[(b, b)] * g[(a, 0)] - g[(a, b)] * g[(b, 0)]) / det;
-        let cb = (g[(a, a)] * g[(b, 0)] - g[(a, b)] * g[(a, 0)]) / det;
-        own - ca * g[(a, 0)] - cb * g[(b, 0)]
+        gs.cholesky().map_or(own, |ch| own - gv.dot(&ch.solve(&gv)))
     };
-    let m = others.len();
-    let alone: Vec<bool> = (0..=m)
-        .map(|a| a > 0 && left_by_one(a) > tolerance)
+    let holds = |set: &[usize]| left(set) < tolerance;
+    // Columns something is left of beyond the rest, that do not hold the effect alone.
+    let free: Vec<usize> = (1..=usable.len())
+        .filter(|&a| g[(a, a)] > 1e-12 * d.column(a).norm_squared() && !holds(&[a]))
         .collect();
-    (1..=m)
-        .flat_map(|a| (a + 1..=m).map(move |b| (a, b)))
-        .filter(|&(a, b)| alone[a] && alone[b] && left_by_two(a, b) < tolerance)
-        .take(EQUIVALENT_PAIRS)
-        .map(|(a, b)| (others[a - 1].name.clone(), others[b - 1].name.clone()))
+    let mut sets: Vec<Vec<usize>> = Vec::new();
+    'search: for (x, &a) in free.iter().enumerate() {
+        for (y, &b) in free.iter().enumerate().skip(x + 1) {
+            if size == 2 {
+                if holds(&[a, b]) {
+                    sets.push(vec![a, b]);
+                }
+            } else if !holds(&[a, b]) {
+                for &c in &free[y + 1..] {
+                    if !holds(&[a, c]) && !holds(&[b, c]) && holds(&[a, b, c]) {
+                        sets.push(vec![a, b, c]);
+                    }
+                }
+            }
+            if sets.len() >= EQUIVALENT_SETS {
+                break 'search;
+            }
+        }
+    }
+    sets.into_iter()
+        .take(EQUIVALENT_SETS)
+        .map(|set| set.into_iter().map(|a| usable[a - 1]).collect())
         .collect()
 }
 

@@ -351,7 +351,7 @@ pub fn markdown(d: &Diagnosis, title: &str) -> String {
     if !d.base_completed.is_empty() {
         let _ = writeln!(
             s,
-            "Component errors needed higher orders than the base model states, or than the cubic a component error found as a cause is (added to the base, before the search or once a cause that hid them or that they complete was in; not causes): {}.\n",
+            "Component errors needed higher orders than the base model states, or than the polynomial a component error was found as (added to the base, before the search or once a cause that hid them or that they complete was in; not causes): {}.\n",
             d.base_completed.join(", ")
         );
     }

@@ -254,6 +254,14 @@ fn tracker_length_scale_is_found() {
     assert_eq!(f.name, "tracker scale", "{}", report(&d));
     let e = &f.estimates[0];
     assert!((e.value - scale).abs() <= 2.0 * e.uncertainty, "{}", e.text);
+    // With the stations free, lengths too long in proportion are the machine scaled as a
+    // whole: the report names the axes' common scale it cannot tell from it.
+    assert_eq!(
+        f.alternatives,
+        ["EXX scale, EYY scale and EZZ scale together"],
+        "{}",
+        report(&d)
+    );
 }
 
 /// A volumetric model (every component error as a cubic, no squareness) on a machine whose X
