@@ -3206,8 +3206,12 @@ impl Searcher<'_> {
     /// leave the rest to a cause that stands in for the difference. The split takes the place
     /// of the drift where it lowers χ² — against the drift unsplit, the others' time constants
     /// chosen again the same way — by more than the F test at `alpha` admits for its two more
-    /// parameters (Bonferroni over the splits tried); what then stands in for nothing
-    /// leaves by the pruning. Each of the two is tried in the other form of its parameter too
+    /// parameters (Bonferroni over the splits tried), and by as much in the differences
+    /// between visits of the same pose ([`Searcher::within_poses_gain`]; against a base
+    /// without the machine's ordinary errors a head's spindle growth was split into drifts of
+    /// both lines, one of them 23 µm, on what those errors leave as a function of the pose);
+    /// what then stands in for nothing leaves by the pruning. Each of the two is tried in the
+    /// other form of its parameter too
     /// (a line moving with or without what it carries: the exact equivalents are of one form,
     /// the lines' drifts may be the other). Returns the splits made (each as the exchange of
     /// the drift for the first of the two).
@@ -3266,16 +3270,25 @@ impl Searcher<'_> {
                 }
                 // Against the drift unsplit with the time constants chosen again the same way:
                 // the split must earn its drop, not the others' time constants chosen anew.
-                let unsplit = self.rechoose_around(&mut chosen.clone(), &[j], base_fit);
-                (unsplit, rss, j, trial)
+                let mut unsplit_model = chosen.clone();
+                let unsplit = self.rechoose_around(&mut unsplit_model, &[j], base_fit);
+                (unsplit, rss, j, trial, unsplit_model)
             })
             .max_by(|a, b| (a.0 - a.1).total_cmp(&(b.0 - b.1)));
-        let Some((unsplit, rss, j, mut trial)) = best else {
+        let Some((unsplit, rss, j, mut trial, unsplit_model)) = best else {
             return made;
         };
         let added = trial.len() - 1;
         let p = f_test(unsplit, unsplit - rss, 2, fit.dof()) * splits.len() as f64;
         if p >= self.params.alpha {
+            return made;
+        }
+        // The drop must show in the differences between visits of the same pose too, where what
+        // the model lacks as a function of the pose drops out: against a base without the
+        // machine's ordinary errors, their leftover passes the test above.
+        if self.within_poses_gain(&unsplit_model, &trial, base_fit) * splits.len() as f64
+            >= self.params.alpha
+        {
             return made;
         }
         for k in [j, added] {
@@ -3289,6 +3302,36 @@ impl Searcher<'_> {
         });
         *chosen = trial;
         made
+    }
+
+    /// The F test's p-value that what the model `larger` fits better than `smaller` (two
+    /// parameters fewer) within the poses is noise: the weighted residual sums of squares less
+    /// their means over each pose ([`Projector::rss_within_poses`]), on the repeat visits less
+    /// the drifts' parameters. Only an effect of time shows there.
+    fn within_poses_gain(
+        &self,
+        smaller: &[Chosen],
+        larger: &[Chosen],
+        base_fit: &Projector,
+    ) -> f64 {
+        let poses = self.obs.poses();
+        let within = |model: &[Chosen]| {
+            self.fit_of(base_fit, &self.with(model, None))
+                .1
+                .rss_within_poses(&poses)
+        };
+        let ((before, repeats), (after, _)) = (within(smaller), within(larger));
+        let drift_parameters: usize = larger
+            .iter()
+            .filter(|c| matches!(c.term.family, Family::Drift { .. }))
+            .map(|c| c.term.width() + 1)
+            .sum();
+        f_test(
+            before,
+            before - after,
+            2,
+            repeats.saturating_sub(drift_parameters),
+        )
     }
 
     /// Chosen term `c` replaced by pool entry `ci` (its first variant; its time constant or

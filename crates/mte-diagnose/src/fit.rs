@@ -948,38 +948,39 @@ impl Projector {
     /// within the poses, the part of it `c` explains, and its degrees of freedom (the repeat
     /// visits); `None` where fewer than two would remain beside `c`.
     pub fn within_poses(&self, c: &DMat, poses: &[usize]) -> Option<(f64, f64, usize)> {
-        let groups = poses.iter().max().map_or(0, |&m| m + 1);
-        let mut count = vec![0usize; groups];
-        for &p in poses {
-            count[p] += 1;
-        }
-        let demeaned = |v: DVec| -> DVec {
-            let mut sum = vec![0.0; groups];
-            for (&p, x) in poses.iter().zip(v.iter()) {
-                sum[p] += x;
-            }
-            DVec::from_fn(v.len(), |i, _| {
-                v[i] - sum[poses[i]] / count[poses[i]] as f64
-            })
-        };
         let cw = self.residual_part(c);
         let x = DMat::from_columns(
             &cw.column_iter()
-                .map(|col| demeaned(col.into_owned()))
+                .map(|col| less_pose_means(col.into_owned(), poses))
                 .collect::<Vec<_>>(),
         );
-        let r = demeaned(self.rw.clone());
-        let repeats: usize = count.iter().filter(|&&k| k > 1).map(|&k| k - 1).sum();
+        let (rss, repeats) = self.rss_within_poses(poses);
         if repeats < c.ncols() + 2 {
             return None;
         }
+        let r = less_pose_means(self.rw.clone(), poses);
         let b = x.tr_mul(&r);
         let explained = x
             .tr_mul(&x)
             .pseudo_inverse(1e-12)
             .ok()
             .map_or(0.0, |g| b.dot(&(g * &b)));
-        Some((r.norm_squared(), explained, repeats))
+        Some((rss, explained, repeats))
+    }
+
+    /// The weighted residual sum of squares within the poses of `poses` (the whitened residuals
+    /// less their means over each pose), and the number of repeat visits it rests on.
+    pub fn rss_within_poses(&self, poses: &[usize]) -> (f64, usize) {
+        let groups = poses.iter().max().map_or(0, |&m| m + 1);
+        let mut count = vec![0usize; groups];
+        for &p in poses {
+            count[p] += 1;
+        }
+        let repeats = count.iter().filter(|&&k| k > 1).map(|&k| k - 1).sum();
+        (
+            less_pose_means(self.rw.clone(), poses).norm_squared(),
+            repeats,
+        )
     }
 
     /// Whitened `c` with the current model projected out.
@@ -1606,6 +1607,20 @@ fn orthonormal_basis_and_map(a: &DMat) -> (DMat, DMat) {
         start += len;
     }
     (q, &map * &inv)
+}
+
+/// `v` less its mean over each pose of `poses` (a pose index per entry).
+fn less_pose_means(mut v: DVec, poses: &[usize]) -> DVec {
+    let groups = poses.iter().max().map_or(0, |&m| m + 1);
+    let (mut sum, mut count) = (vec![0.0; groups], vec![0usize; groups]);
+    for (&p, x) in poses.iter().zip(v.iter()) {
+        sum[p] += x;
+        count[p] += 1;
+    }
+    for (x, &p) in v.iter_mut().zip(poses) {
+        *x -= sum[p] / count[p] as f64;
+    }
+    v
 }
 
 #[cfg(test)]
