@@ -954,7 +954,7 @@ impl Projector {
                 .map(|col| less_pose_means(col.into_owned(), poses))
                 .collect::<Vec<_>>(),
         );
-        let (rss, repeats) = self.rss_within_poses(poses);
+        let repeats = repeat_visits(poses);
         if repeats < c.ncols() + 2 {
             return None;
         }
@@ -965,21 +965,15 @@ impl Projector {
             .pseudo_inverse(1e-12)
             .ok()
             .map_or(0.0, |g| b.dot(&(g * &b)));
-        Some((rss, explained, repeats))
+        Some((r.norm_squared(), explained, repeats))
     }
 
     /// The weighted residual sum of squares within the poses of `poses` (the whitened residuals
     /// less their means over each pose), and the number of repeat visits it rests on.
     pub fn rss_within_poses(&self, poses: &[usize]) -> (f64, usize) {
-        let groups = poses.iter().max().map_or(0, |&m| m + 1);
-        let mut count = vec![0usize; groups];
-        for &p in poses {
-            count[p] += 1;
-        }
-        let repeats = count.iter().filter(|&&k| k > 1).map(|&k| k - 1).sum();
         (
             less_pose_means(self.rw.clone(), poses).norm_squared(),
-            repeats,
+            repeat_visits(poses),
         )
     }
 
@@ -1607,6 +1601,15 @@ fn orthonormal_basis_and_map(a: &DMat) -> (DMat, DMat) {
         start += len;
     }
     (q, &map * &inv)
+}
+
+/// Visits of a pose after its first, over all poses of `poses` (a pose index per entry).
+fn repeat_visits(poses: &[usize]) -> usize {
+    let mut count = vec![0usize; poses.iter().max().map_or(0, |&m| m + 1)];
+    for &p in poses {
+        count[p] += 1;
+    }
+    count.iter().map(|&k| k.saturating_sub(1)).sum()
 }
 
 /// `v` less its mean over each pose of `poses` (a pose index per entry).
