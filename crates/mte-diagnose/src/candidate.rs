@@ -978,16 +978,18 @@ impl BaseModelSpec {
             .par_iter()
             .filter(|slot| !held(slot) && slot.column.iter().any(|v| v.abs() >= 1e-15))
             .flat_map_iter(|slot| {
-                let orders = component_orders(obs, slot, CAUSE_DEGREE)
-                    .filter(|&(_, hi, rotary)| !rotary && hi == CAUSE_DEGREE);
                 // The causes' lowest degree: a positioning error's linear part is its scale.
-                let first = match &slot.role {
-                    SlotRole::Component { positioning, .. } if *positioning => 2,
-                    _ => orders.map_or(1, |o| o.0),
-                };
-                orders
+                let positioning = matches!(
+                    slot.role,
+                    SlotRole::Component {
+                        positioning: true,
+                        ..
+                    }
+                );
+                component_orders(obs, slot, CAUSE_DEGREE)
+                    .filter(|&(_, hi, rotary)| !rotary && hi == CAUSE_DEGREE)
                     .into_iter()
-                    .flat_map(move |(_, hi, _)| first..=hi)
+                    .flat_map(move |(lo, hi, _)| (if positioning { 2 } else { lo })..=hi)
                     .flat_map(|degree| {
                         let cause = format!("{} poly{degree}", slot.name);
                         linear_completions(obs, slot, degree, Some(cause))

@@ -4266,7 +4266,8 @@ fn equivalent_drifts(
                 .flatten(),
         })
         .filter(|t| {
-            t.name != term.name
+            t.width() == 1
+                && t.name != term.name
                 && matches!(t.family, Family::Drift { time_constant_s: tc } if tc == time_constant_s)
         })
         .collect();
@@ -4297,7 +4298,7 @@ fn constant_in_time(t: &Term) -> bool {
 
 /// Sets of two or three of the causes `singles` ([`single_constants`]) outside the final model
 /// (`in_model`), that together give the readings the constant finding `term` gives
-/// ([`equivalent_sets`]; pairs, or triples where no pair does): from tracker lengths with the
+/// ([`equivalent_sets`]: pairs, or triples where no pair does): from tracker lengths with the
 /// stations free, the tracker's length scale is a common scale error of X, Y and Z,
 /// `EXX scale`, `EYY scale` and `EZZ scale` alike. Each set's names joined, in the library's
 /// order.
@@ -4314,11 +4315,8 @@ fn equivalent_constants(
         .iter()
         .filter(|t| t.name != term.name && !in_model(&t.name))
         .collect();
-    let mut sets = equivalent_sets(rest, term, &others, 2);
-    if sets.is_empty() {
-        sets = equivalent_sets(rest, term, &others, 3);
-    }
-    sets.into_iter()
+    equivalent_sets(rest, term, &others, 3)
+        .into_iter()
         .map(|set| {
             let names: Vec<&str> = set.iter().map(|&i| others[i].name.as_str()).collect();
             let (last, first) = names.split_last().expect("a set has two or three");
@@ -4327,27 +4325,24 @@ fn equivalent_constants(
         .collect()
 }
 
-/// Sets of exactly `size` (2 or 3) of the single-column terms `others` that together give the
-/// readings the single-column finding `term` gives: beyond the rest of the final model (its fit
-/// `rest`), all but [`EQUIVALENT_SHARE`] of the finding's effect is theirs, and no smaller part
-/// of a set holds it. The sets as indices into `others`, in their order, at most
-/// [`EQUIVALENT_SETS`].
+/// The smallest sets, of two or up to `largest` (at most 3) of the single-column terms
+/// `others`, that together give the readings the single-column finding `term` gives: beyond the
+/// rest of the final model (its fit `rest`), all but [`EQUIVALENT_SHARE`] of the finding's
+/// effect is theirs, and no smaller part of a set holds it. Pairs where there are any, else
+/// triples; the sets as indices into `others`, in their order, at most [`EQUIVALENT_SETS`].
 fn equivalent_sets(
     rest: &Projector,
     term: &Term,
     others: &[&Term],
-    size: usize,
+    largest: usize,
 ) -> Vec<Vec<usize>> {
-    let usable: Vec<usize> = (0..others.len())
-        .filter(|&i| others[i].width() == 1)
-        .collect();
-    if usable.len() < size || term.width() != 1 || !(2..=3).contains(&size) {
+    if others.len() < 2 || term.width() != 1 {
         return Vec::new();
     }
-    let mut d = DMat::zeros(term.columns.nrows(), usable.len() + 1);
+    let mut d = DMat::zeros(term.columns.nrows(), others.len() + 1);
     d.set_column(0, &term.columns.column(0));
-    for (k, &i) in usable.iter().enumerate() {
-        d.set_column(k + 1, &others[i].columns.column(0));
+    for (k, t) in others.iter().enumerate() {
+        d.set_column(k + 1, &t.columns.column(0));
     }
     // Beyond the rest of the model: the finding's effect (column 0) and each other's.
     let r = rest.residual_part(&d);
@@ -4372,31 +4367,38 @@ fn equivalent_sets(
     };
     let holds = |set: &[usize]| left(set) < tolerance;
     // Columns something is left of beyond the rest, that do not hold the effect alone.
-    let free: Vec<usize> = (1..=usable.len())
+    let free: Vec<usize> = (1..=others.len())
         .filter(|&a| g[(a, a)] > 1e-12 * d.column(a).norm_squared() && !holds(&[a]))
         .collect();
-    let mut sets: Vec<Vec<usize>> = Vec::new();
-    'search: for (x, &a) in free.iter().enumerate() {
-        for (y, &b) in free.iter().enumerate().skip(x + 1) {
-            if size == 2 {
-                if holds(&[a, b]) {
-                    sets.push(vec![a, b]);
-                }
-            } else if !holds(&[a, b]) {
-                for &c in &free[y + 1..] {
-                    if !holds(&[a, c]) && !holds(&[b, c]) && holds(&[a, b, c]) {
-                        sets.push(vec![a, b, c]);
+    let sets_of = |size: usize| {
+        let mut sets: Vec<Vec<usize>> = Vec::new();
+        'search: for (x, &a) in free.iter().enumerate() {
+            for (y, &b) in free.iter().enumerate().skip(x + 1) {
+                if size == 2 {
+                    if holds(&[a, b]) {
+                        sets.push(vec![a, b]);
+                    }
+                } else if !holds(&[a, b]) {
+                    for &c in &free[y + 1..] {
+                        if !holds(&[a, c]) && !holds(&[b, c]) && holds(&[a, b, c]) {
+                            sets.push(vec![a, b, c]);
+                        }
                     }
                 }
-            }
-            if sets.len() >= EQUIVALENT_SETS {
-                break 'search;
+                if sets.len() >= EQUIVALENT_SETS {
+                    break 'search;
+                }
             }
         }
-    }
-    sets.into_iter()
+        sets
+    };
+    (2..=largest.min(3))
+        .map(sets_of)
+        .find(|sets| !sets.is_empty())
+        .unwrap_or_default()
+        .into_iter()
         .take(EQUIVALENT_SETS)
-        .map(|set| set.into_iter().map(|a| usable[a - 1]).collect())
+        .map(|set| set.into_iter().map(|a| a - 1).collect())
         .collect()
 }
 
