@@ -1391,10 +1391,12 @@ separate, as R-test practice identifies them; for tracker lengths the stations a
 machine has every ordinary error besides, so the diagnosis finds them — component errors as \
 polynomials, squareness, error motions of a rotary axis over a turn — and names them as \
 ordinary errors the base leaves out (`Finding::ordinary`; the report says which base would hold \
-them). It adds those first: while one still earns its place no drift and no periodic error at \
-a free period goes in, which would otherwise take the shape of a missing ordinary error for \
-its own (a pitch of Y at a period of 1.17 mm, a drift of EA0C over a single cycle, both on \
-clean machines), and a drift must show in the differences between visits of the same pose. *with a finding other than an ordinary error*: a false discovery on a clean \
+them). It adds those first: while one still earns its place no drift, no periodic error at \
+a free period and no set-up error of the instrument goes in, which would otherwise take the \
+shape of a missing ordinary error for its own (a pitch of Y at a period of 1.17 mm, a drift of \
+EA0C over a single cycle, a ball's centring offset, all on clean machines); a drift must show \
+in the differences between visits of the same pose, and a pitch must predict the residuals \
+at positions of its axis it was not fitted to (the report lists those passed over). *with a finding other than an ordinary error*: a false discovery on a clean \
 machine; *of which every such finding qualified*: the report says of each that its period \
 and shape are not determined, or that it is one effect of a form no candidate has, or it lists \
 what these data cannot tell the finding from; \

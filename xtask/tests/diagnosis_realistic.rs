@@ -89,6 +89,40 @@ fn against_the_rtest_default_base_a_clean_machine_is_given_its_ordinary_errors_a
 }
 
 #[test]
+fn a_pitch_fitting_what_missing_ordinary_errors_leave_is_passed_over() {
+    // Against the R-test's location-only default base, two clean machines of the study (its
+    // seed 1) were given a pitch of Y at 1.57 and 1.37 mm on positions some 6 mm apart, as a
+    // caveated finding: a few dozen positions and hundreds of periods hold the structure the
+    // ordinary errors the search had not yet found leave in the residuals. Fitted on the
+    // residuals at some Y positions, its period chosen again there, it does not predict those
+    // at the others: passed over, the structure left to the verdict.
+    for index in [2, 6] {
+        let seed = studies::dataset_seed(1, "fdr-rtest", index);
+        let mut spec = xtask::realistic::Spec::new(Kind::Rtest, &[]);
+        spec.base_model = xtask::realistic::BaseModel::Omit;
+        let dir = std::env::temp_dir().join(format!("mte-test-{}-{seed}", std::process::id()));
+        let truth = xtask::realistic::write_spec(&spec, seed, &dir).unwrap();
+        let noise = xtask::realistic::axis::stated_noise(truth.noise_um);
+        let d = mte_diagnose::load_with_noise(&truth.manifest, Some(noise))
+            .unwrap()
+            .diagnose(&mte_diagnose::DiagnoseParams::default())
+            .unwrap();
+        let _ = std::fs::remove_dir_all(&dir);
+        let names: Vec<&str> = d.findings.iter().map(|f| f.name.as_str()).collect();
+        assert!(
+            !names.iter().any(|n| n.starts_with("EYY periodic")),
+            "{names:?}"
+        );
+        let passed = d.passed_over.iter().find(|p| p.name == "EYY periodic");
+        assert!(
+            passed.is_some_and(|p| p.axis == "Y" && p.ratio > 0.98),
+            "{:?}",
+            d.passed_over
+        );
+    }
+}
+
+#[test]
 fn hidden_axis_effects_are_named_and_sized() {
     for (effect, size) in [(Effect::Pitch, 2.0), (Effect::Reversal, 1.5)] {
         let cells = studies::power(Kind::Axis, effect, &[size], 6, SEED);

@@ -14,8 +14,8 @@ use crate::candidate::{Candidate, Role, Score, Spread, SpreadVariants};
 use crate::data::{Observations, VariableKind};
 use crate::fit::{
     Directions, Folds, Increment, Projector, SEPARABILITY_TOLERANCE, Solution, SpreadProducts,
-    block_grams, design, max_abs, rms, separable_columns, solve, tr_mul, weighted_products,
-    weighted_products_by_rows, whitened_r, whitening,
+    block_grams, design, fit_on_rows, max_abs, rms, separable_columns, solve, tr_mul,
+    weighted_products, weighted_products_by_rows, whitened_r, whitening,
 };
 use crate::structure::{StructureTest, structure_tests};
 use crate::term::{Estimate, Family, Interval, Quantity, Summary, Term};
@@ -445,6 +445,20 @@ pub struct Exchange {
     pub chi2_drop: f64,
 }
 
+/// A periodic error at a free period along a linear axis that the search passed over: it fitted
+/// the residuals and lowered their held-out RMS, but did not predict the readings at positions
+/// of its axis it was not fitted to ([`Diagnosis::passed_over`]).
+#[derive(Debug, Clone, Serialize)]
+pub struct PassedOver {
+    /// The cause (`EYY periodic`).
+    pub name: String,
+    /// The axis whose positions were held out.
+    pub axis: String,
+    /// The residuals' RMS at held-out positions with its prediction (its period chosen on the
+    /// other positions' residuals) taken off, as a fraction of theirs.
+    pub ratio: f64,
+}
+
 /// One step of the search.
 #[derive(Debug, Clone, Serialize)]
 pub struct Step {
@@ -558,6 +572,9 @@ pub struct Diagnosis {
     pub exchanged: Vec<Exchange>,
     /// Causes added by the search and removed again when re-tested in the complete model.
     pub pruned: Vec<String>,
+    /// Periodic errors at a free period that fitted the residuals but did not predict the
+    /// readings between the positions they were fitted to: not named.
+    pub passed_over: Vec<PassedOver>,
     /// Candidates the data cannot separate from the model.
     pub not_separable: Vec<NotSeparable>,
     /// For each library cause not found (and separable): the size from which these data would
@@ -1397,6 +1414,7 @@ fn conclude(
         compound,
         exchanged,
         pruned,
+        passed_over: search.passed_over,
         not_separable,
         detection_limits: search.detection_limits,
         extended,
@@ -2058,6 +2076,7 @@ struct SearchResult {
     detection_limits: Vec<DetectionLimit>,
     exchanged: Vec<Exchange>,
     pruned: Vec<String>,
+    passed_over: Vec<PassedOver>,
     /// The limit that stopped the search, if one did: `true` for the ordinary errors' one.
     hit_limit: Option<bool>,
     /// A periodic cause that already had its most components ([`most_periodic_components`])
@@ -2324,6 +2343,7 @@ impl Searcher<'_> {
         let mut not_separable = Vec::new();
         let mut detection_limits = Vec::new();
         let mut hit_limit = None;
+        let mut passed_over: Vec<PassedOver> = Vec::new();
         // Completions that became significant once causes were in: part of the base from then.
         let mut late: Vec<Term> = Vec::new();
         let model_terms = |late: &[Term], chosen: &[Chosen]| -> Vec<Term> {
@@ -2536,16 +2556,12 @@ impl Searcher<'_> {
                 .collect();
             scored.sort_by(|a, b| a.2.total_cmp(&b.2).then(b.3.total_cmp(&a.3)));
             let mut ranking = Vec::new();
-            // (entry, variant, cv rms): the best cause, and the best of those that are not a
-            // drift or a periodic error at a free period ([`is_flexible`]), which go first
-            // while an ordinary error the base leaves out earns its place.
-            let mut best: [Option<(usize, usize, f64)>; 2] = [None, None];
-            let mut ordinary_earns = false;
             let mut best_capped: Option<(String, f64, usize)> = None;
             // The held-out RMS of the significant ones (independent: in parallel): the most
-            // significant causes and the most significant of those not flexible.
+            // significant causes and the most significant of those that do not wait for the
+            // ordinary errors ([`waits_for_ordinary`]).
             // (A capped cause does not take an open one's place: the best of them beside.)
-            let rigid = |s: &Scored| !is_flexible(obs, &variants.header(s.0, s.1));
+            let rigid = |s: &Scored| !waits_for_ordinary(obs, &variants.header(s.0, s.1));
             let mut shortlisted: Vec<Scored> = scored
                 .iter()
                 .filter(|s| !capped[s.0])
@@ -2579,6 +2595,8 @@ impl Searcher<'_> {
                     (p < params.alpha).then(|| fold_fits.rms_with(&variants.columns(ci, vi)))
                 })
                 .collect();
+            // (entry, variant, cv rms) of the open causes with a held-out RMS.
+            let mut evaluated: Vec<(usize, usize, f64)> = Vec::new();
             for (&(ci, vi, p, share), cv) in shortlisted.iter().zip(cvs) {
                 let t = variants.header(ci, vi);
                 if capped[ci] {
@@ -2587,27 +2605,7 @@ impl Searcher<'_> {
                         best_capped = Some((t.name.clone(), p, most_periodic_components(obs, &t)));
                     }
                 } else if let Some(r) = cv {
-                    ordinary_earns |= is_ordinary(obs, &t) && r < cv_rms * (1.0 - params.min_gain);
-                    let tiers = if is_flexible(obs, &t) { 0..1 } else { 0..2 };
-                    for best in &mut best[tiers] {
-                        let better = match *best {
-                            None => true,
-                            Some((bc, bv, br)) => {
-                                let b_cost = complexity(&variants.header(bc, bv));
-                                let t_cost = complexity(&t);
-                                // Parsimony: within 1 % of the best CV RMS the simpler cause
-                                // wins.
-                                if (r - br).abs() <= 0.01 * br {
-                                    t_cost < b_cost || (t_cost == b_cost && r < br)
-                                } else {
-                                    r < br
-                                }
-                            }
-                        };
-                        if better {
-                            *best = Some((ci, vi, r));
-                        }
-                    }
+                    evaluated.push((ci, vi, r));
                 }
                 ranking.push(CandidateScore {
                     name: t.name.clone(),
@@ -2616,18 +2614,53 @@ impl Searcher<'_> {
                     cv_rms: cv,
                 });
             }
-            // While an ordinary error the base leaves out earns its place, no drift or periodic
-            // error at a free period goes in: a machine has all the ordinary errors, and while
-            // the model lacks one its shape stands in the residuals, where a flexible cause (a
-            // pitch at any of hundreds of periods, a drift over a single pass) would take it for
-            // its own.
-            let earns = |b: &Option<(usize, usize, f64)>| {
-                b.filter(|(_, _, r)| *r < cv_rms * (1.0 - params.min_gain))
-            };
-            let accepted = if ordinary_earns {
-                earns(&best[1]).or(earns(&best[0]))
-            } else {
-                earns(&best[0])
+            // While an ordinary error the base leaves out earns its place, no drift, periodic
+            // error at a free period or set-up error goes in ([`waits_for_ordinary`]): a machine
+            // has all the ordinary errors, and while the model lacks one its shape stands in the
+            // residuals, where such a cause (a pitch at any of hundreds of periods, a drift over
+            // a single pass, an offset of one set-up's poses) would take it for its own. Each
+            // group's pick is its most parsimonious ([`most_parsimonious`]), and it must earn its
+            // place: an ordinary error earns it only when the simplest of the best ordinary
+            // errors does. A periodic error at a free period along a linear axis must also
+            // predict the readings at positions of the axis it was not fitted to
+            // ([`Searcher::between_positions`]); one that does not is passed over.
+            let accepted = loop {
+                let best = |keep: &dyn Fn(&Term) -> bool| {
+                    most_parsimonious(
+                        evaluated
+                            .iter()
+                            .copied()
+                            .filter(|&(ci, vi, _)| keep(&variants.header(ci, vi))),
+                        |ci, vi| complexity(&variants.header(ci, vi)),
+                    )
+                    .filter(|(_, _, r)| *r < cv_rms * (1.0 - params.min_gain))
+                };
+                let pick = match best(&|t| is_ordinary(obs, t)) {
+                    Some(ordinary) => best(&|t| !waits_for_ordinary(obs, t)).or(Some(ordinary)),
+                    None => best(&|_| true),
+                };
+                let Some((ci, vi, _)) = pick else { break None };
+                let t = variants.header(ci, vi);
+                if !matches!(t.family, Family::Periodic { .. })
+                    || !is_flexible(obs, &t)
+                    || exposed_by_rotary(obs, &t)
+                {
+                    break pick;
+                }
+                let Some(ratio) = self.between_positions(&variants, ci, &projector, w) else {
+                    break pick;
+                };
+                if ratio < 1.0 - params.min_gain {
+                    break pick;
+                }
+                if explain && !passed_over.iter().any(|p: &PassedOver| p.name == t.name) {
+                    passed_over.push(PassedOver {
+                        name: t.name.to_string(),
+                        axis: t.exposed_by.clone().unwrap_or_default(),
+                        ratio,
+                    });
+                }
+                evaluated.retain(|e| e.0 != ci);
             };
             let Some((ci, vi, new_cv)) = accepted else {
                 capped_significant = best_capped;
@@ -2824,6 +2857,7 @@ impl Searcher<'_> {
             detection_limits,
             exchanged,
             pruned,
+            passed_over,
             hit_limit,
             capped: capped_significant,
         }
@@ -3302,6 +3336,70 @@ impl Searcher<'_> {
         });
         *chosen = trial;
         made
+    }
+
+    /// How well the periodic cause `ci` (at a free period along a linear axis) predicts the
+    /// residuals of the step's model (its fit `projector`) at positions of its axis it was not
+    /// fitted to: the axis' distinct positions among the observations of nonzero weight `w` in
+    /// [`SearchParams::folds`] interleaved folds ([`Folds::by_position`]); for each, the cause's
+    /// part beyond the model is fitted to the residuals outside the fold, its period chosen
+    /// again on them alone (the grid's best and its other peaks, refined), and predicts the
+    /// fold's. The RMS of the fold's residuals with that prediction taken off, as a fraction of
+    /// theirs; `None` when the axis is not known.
+    ///
+    /// Hundreds of periods, each a different pattern at a few dozen positions, hold nearly any
+    /// structure of the residuals for a while: the shape of ordinary errors a model lacks, seen
+    /// at the poses an R-test's ball path visits, fitted by a pitch of 1.37 mm on positions
+    /// 6 mm apart. A pitch error the axis has predicts between them; such a fit does not.
+    fn between_positions(
+        &self,
+        variants: &SearchVariants,
+        ci: usize,
+        projector: &Projector,
+        w: &DVec,
+    ) -> Option<f64> {
+        let t = variants.header(ci, 0);
+        let axis = t.exposed_by.as_deref().and_then(|v| self.obs.variable(v))?;
+        let include: Vec<bool> = w.iter().map(|&v| v > 0.0).collect();
+        let folds = Folds::by_position(&axis.values, &include, self.params.folds);
+        let trained: Vec<Vec<usize>> = folds
+            .test
+            .iter()
+            .map(|test| {
+                (0..include.len())
+                    .filter(|&i| include[i] && test.binary_search(&i).is_err())
+                    .collect()
+            })
+            .collect();
+        let r = projector.weighted_residuals();
+        // Each fold's profile of the grid: the fall of the training rows' residuals.
+        let mut profiles = vec![Vec::new(); folds.test.len()];
+        for v in 0..self.pool.variants[ci].len() {
+            let beyond = projector.residual_part(&self.pool.columns(ci, v));
+            for (profile, rows) in profiles.iter_mut().zip(&trained) {
+                profile.push((v, fit_on_rows(&beyond, r, rows).0));
+            }
+        }
+        let (mut without, mut with) = (0.0, 0.0);
+        for ((test, rows), profile) in folds.test.iter().zip(&trained).zip(&profiles) {
+            let gain = |c: &DMat| fit_on_rows(&projector.residual_part(c), r, rows).0;
+            let score = Score::new(|t: &Term| -gain(&t.columns));
+            let &(best, top) = profile.iter().max_by(|a, b| a.1.total_cmp(&b.1))?;
+            let columns = grid_peaks(profile, best, top)
+                .into_iter()
+                .map(|peak| match self.candidate(ci).refine(peak, &score) {
+                    Some(t) => t.columns,
+                    None => self.pool.columns(ci, peak).into_owned(),
+                })
+                .max_by(|a, b| gain(a).total_cmp(&gain(b)))?;
+            let beyond = projector.residual_part(&columns);
+            let (_, coefficients) = fit_on_rows(&beyond, r, rows);
+            for &i in test {
+                without += r[i] * r[i];
+                with += (r[i] - beyond.row(i).transpose().dot(&coefficients)).powi(2);
+            }
+        }
+        (without > 0.0).then(|| (with / without).sqrt())
     }
 
     /// The F test's p-value that what the model `larger` fits better than `smaller` (two
@@ -4837,7 +4935,6 @@ fn drift_shapes(
         .collect()
 }
 
-/// Whether the variable that exposes `t` is a rotary axis (its periods are angles).
 /// Whether `t` is an ordinary error every machine has ([`crate::Shorthand::of_ordinary`]): a
 /// component error of an axis, an error motion of a rotary axis over a turn, a squareness, a
 /// location error. The search adds those the base leaves out before any drift or periodic
@@ -4855,6 +4952,16 @@ fn is_flexible(obs: &Observations, t: &Term) -> bool {
     matches!(t.family, Family::Drift { .. } | Family::Periodic { .. }) && !is_ordinary(obs, t)
 }
 
+/// Whether `t` waits while an ordinary error the base leaves out earns its place: a flexible
+/// cause ([`is_flexible`]), or an error of the instrument's set-up (a ball's centring, the
+/// nest's offset), whose readings, one set-up's poses each, take the part of the shape a
+/// missing ordinary error leaves at those poses (on clean R-tests against the location-only
+/// default, a nest or centring offset entered at the first steps).
+fn waits_for_ordinary(obs: &Observations, t: &Term) -> bool {
+    is_flexible(obs, t) || t.family == Family::Setup
+}
+
+/// Whether the variable that exposes `t` is a rotary axis (its periods are angles).
 fn exposed_by_rotary(obs: &Observations, t: &Term) -> bool {
     crate::candidate::is_rotary(obs, t.exposed_by.as_deref())
 }
@@ -5584,6 +5691,26 @@ fn is_iso_squareness_of(name: &str, t: &Term) -> bool {
     use crate::candidate::squareness_plane;
     t.family == Family::Squareness
         && matches!((squareness_plane(&t.name), squareness_plane(name)), (Some((a, false)), Some((b, true))) if a == b)
+}
+
+/// Of `(entry, variant, cv rms)` candidates in order, the one of lowest held-out RMS, save that
+/// within 1 % of it the simpler cause wins (parsimony; `cost`: [`complexity`]).
+fn most_parsimonious(
+    candidates: impl Iterator<Item = (usize, usize, f64)>,
+    cost: impl Fn(usize, usize) -> (usize, usize),
+) -> Option<(usize, usize, f64)> {
+    candidates.fold(None, |best, (ci, vi, r)| match best {
+        None => Some((ci, vi, r)),
+        Some((bc, bv, br)) => {
+            let (b_cost, t_cost) = (cost(bc, bv), cost(ci, vi));
+            let better = if (r - br).abs() <= 0.01 * br {
+                t_cost < b_cost || (t_cost == b_cost && r < br)
+            } else {
+                r < br
+            };
+            Some(if better { (ci, vi, r) } else { (bc, bv, br) })
+        }
+    })
 }
 
 /// How much a term asks of the data: coefficients first, then hyper-parameters and

@@ -274,6 +274,21 @@ impl Folds {
         Folds { test }
     }
 
+    /// `k` folds of the distinct `positions` (an axis' coordinate of each observation) of the
+    /// observations marked in `include`, interleaved by rank: fold `j` holds every observation
+    /// at the `j`-th, `(j + k)`-th … position along the axis, so each held-out position has
+    /// training positions on both sides.
+    pub fn by_position(positions: &[f64], include: &[bool], k: usize) -> Folds {
+        let k = k.max(1);
+        let mut test = vec![Vec::new(); k];
+        for (i, rank) in position_ranks(positions, include).into_iter().enumerate() {
+            if let Some(rank) = rank {
+                test[rank % k].push(i);
+            }
+        }
+        Folds { test }
+    }
+
     /// RMS of out-of-fold residuals over the observations the folds hold out.
     pub fn rms(&self, cv: &DVec) -> f64 {
         let (sum, count) = self
@@ -286,6 +301,42 @@ impl Folds {
         } else {
             (sum / count as f64).sqrt()
         }
+    }
+}
+
+/// The rank of each observation's position among the distinct `positions` of the observations
+/// marked in `include` (`None` for the others).
+pub(crate) fn position_ranks(positions: &[f64], include: &[bool]) -> Vec<Option<usize>> {
+    let kept: Vec<f64> = positions
+        .iter()
+        .zip(include)
+        .filter_map(|(&p, &keep)| keep.then_some(p))
+        .collect();
+    let distinct = crate::basis::distinct_sorted(&kept);
+    positions
+        .iter()
+        .zip(include)
+        .map(|(&p, &keep)| keep.then(|| distinct.partition_point(|&d| d < p - 1e-9)))
+        .collect()
+}
+
+/// The least-squares fit of `r` by the columns `c` on the rows `rows` alone (both whitened):
+/// the fall of the residual sum of squares over those rows and the coefficients (zero when the
+/// rows do not determine them).
+pub(crate) fn fit_on_rows(c: &DMat, r: &DVec, rows: &[usize]) -> (f64, DVec) {
+    let k = c.ncols();
+    let (mut g, mut b) = (DMat::zeros(k, k), DVec::zeros(k));
+    for &i in rows {
+        let row = c.row(i).transpose();
+        g.ger(1.0, &row, &row, 1.0);
+        b.axpy(r[i], &row, 1.0);
+    }
+    match mte_linalg::lstsq::spd_inverse(&g) {
+        Some(inv) => {
+            let beta = inv * &b;
+            (b.dot(&beta), beta)
+        }
+        None => (0.0, DVec::zeros(k)),
     }
 }
 
@@ -852,6 +903,11 @@ impl Projector {
     /// Each observation's leverage, the diagonal of the whitened hat matrix `Q Qᵀ`.
     pub fn leverages(&self) -> DVec {
         DVec::from_fn(self.q.nrows(), |i, _| self.q.row(i).norm_squared())
+    }
+
+    /// The model's whitened residuals.
+    pub fn weighted_residuals(&self) -> &DVec {
+        &self.rw
     }
 
     /// Weighted residual sum of squares of the model's fit.
@@ -1668,6 +1724,25 @@ mod tests {
         assert!((&g1 - &g2).norm() < 1e-12 * g1.norm());
         let (b1, b2) = (r1.tr_mul(&qty1), r2.tr_mul(&qty2));
         assert!((&b1 - &b2).norm() < 1e-12 * b1.norm());
+    }
+
+    #[test]
+    fn position_folds_hold_out_every_reading_at_a_position_and_interleave_the_positions() {
+        // Positions 0, 10, 20, 30 (twice each, 20 also just below by rounding), one excluded.
+        let x = [20.0, 0.0, 10.0, 30.0, 20.0 - 1e-12, 0.0, 10.0, 30.0, 5.0];
+        let include = [true, true, true, true, true, true, true, true, false];
+        let f = Folds::by_position(&x, &include, 2);
+        assert_eq!(f.test, vec![vec![0, 1, 4, 5], vec![2, 3, 6, 7]]);
+    }
+
+    #[test]
+    fn a_fit_on_some_rows_is_the_least_squares_fit_of_those_rows() {
+        // r = 2 + 3 t on rows 0..3 and anything on row 3: the fit on rows 0..3 recovers it.
+        let c = DMat::from_row_slice(4, 2, &[1.0, 0.0, 1.0, 1.0, 1.0, 2.0, 1.0, 3.0]);
+        let r = DVec::from_column_slice(&[2.0, 5.0, 8.0, -40.0]);
+        let (gain, beta) = fit_on_rows(&c, &r, &[0, 1, 2]);
+        assert_relative_eq!(beta, DVec::from_column_slice(&[2.0, 3.0]), epsilon = 1e-12);
+        assert_relative_eq!(gain, 4.0 + 25.0 + 64.0, epsilon = 1e-10);
     }
 
     #[test]
