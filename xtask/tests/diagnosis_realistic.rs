@@ -21,6 +21,23 @@ fn diagnosed(spec: &xtask::realistic::Spec, seed: u64) -> mte_diagnose::Diagnosi
     d
 }
 
+/// The truth of the R-test dataset `spec` writes from `seed` and its diagnosis with the default
+/// settings, its noise stated as the studies state it (an R-test manifest states none).
+fn diagnosed_with_stated_noise(
+    spec: &xtask::realistic::Spec,
+    seed: u64,
+) -> (xtask::realistic::Truth, mte_diagnose::Diagnosis) {
+    let dir = std::env::temp_dir().join(format!("mte-test-noise-{}-{seed}", std::process::id()));
+    let truth = xtask::realistic::write_spec(spec, seed, &dir).unwrap();
+    let noise = xtask::realistic::axis::stated_noise(truth.noise_um);
+    let d = mte_diagnose::load_with_noise(&truth.manifest, Some(noise))
+        .unwrap()
+        .diagnose(&mte_diagnose::DiagnoseParams::default())
+        .unwrap();
+    let _ = std::fs::remove_dir_all(&dir);
+    (truth, d)
+}
+
 /// The diagnosis, with the default settings, of the dataset of `manifest`.
 fn diagnosed_manifest(manifest: &std::path::Path) -> mte_diagnose::Diagnosis {
     let p = mte_diagnose::load(manifest).unwrap();
@@ -100,14 +117,7 @@ fn a_pitch_fitting_what_missing_ordinary_errors_leave_is_passed_over() {
         let seed = studies::dataset_seed(1, "fdr-rtest", index);
         let mut spec = xtask::realistic::Spec::new(Kind::Rtest, &[]);
         spec.base_model = xtask::realistic::BaseModel::Omit;
-        let dir = std::env::temp_dir().join(format!("mte-test-{}-{seed}", std::process::id()));
-        let truth = xtask::realistic::write_spec(&spec, seed, &dir).unwrap();
-        let noise = xtask::realistic::axis::stated_noise(truth.noise_um);
-        let d = mte_diagnose::load_with_noise(&truth.manifest, Some(noise))
-            .unwrap()
-            .diagnose(&mte_diagnose::DiagnoseParams::default())
-            .unwrap();
-        let _ = std::fs::remove_dir_all(&dir);
+        let (_, d) = diagnosed_with_stated_noise(&spec, seed);
         let names: Vec<&str> = d.findings.iter().map(|f| f.name.as_str()).collect();
         assert!(
             !names.iter().any(|n| n.starts_with("EYY periodic")),
@@ -233,18 +243,11 @@ fn a_first_order_drift_that_entered_in_linear_form_is_given_its_first_order_cour
     // linear one. The linear drift was then left carrying a course it does not have, with a
     // caveat that its course is neither linear nor first-order. The final model offers it its
     // first-order form: every drift found is first-order, with no such caveat.
-    use xtask::realistic::{Spec, write_spec};
+    use xtask::realistic::Spec;
     let effects = [(Effect::PivotDrift, 10.0), (Effect::SpindleDrift, 10.0)];
     let seed = studies::dataset_seed(1, "combined-rtest-PivotDrift-10-SpindleDrift-10", 3);
     let spec = Spec::new(Kind::Rtest, &studies::hidden_of_seed(&effects, seed));
-    let dir = std::env::temp_dir().join(format!("mte-test-first-order-{}", std::process::id()));
-    let truth = write_spec(&spec, seed, &dir).unwrap();
-    let noise = xtask::realistic::axis::stated_noise(truth.noise_um);
-    let d = mte_diagnose::load_with_noise(&truth.manifest, Some(noise))
-        .unwrap()
-        .diagnose(&mte_diagnose::DiagnoseParams::default())
-        .unwrap();
-    let _ = std::fs::remove_dir_all(&dir);
+    let (truth, d) = diagnosed_with_stated_noise(&spec, seed);
     let names: Vec<&str> = d.findings.iter().map(|f| f.name.as_str()).collect();
     assert_eq!(d.findings.len(), 2, "{names:?}");
     for f in &d.findings {
@@ -302,16 +305,12 @@ fn a_first_order_form_that_did_not_earn_its_time_constant_gives_way_to_the_linea
     // the linear one's, though its time constant lowers χ² by about 2 only, far less than the
     // 6.63 a parameter more must earn; its final value was then stated for a drift that has
     // none. The final model takes the linear form and reports the rate, within 2 u of the truth.
-    use xtask::realistic::{Spec, write_spec};
     let effects = [(Effect::ZeroDrift, 0.1)];
     let seed = studies::dataset_seed(1, "power-axis-ZeroDrift-0.1", 13);
-    let spec = Spec::new(Kind::Axis, &studies::hidden_of_seed(&effects, seed));
+    let spec = xtask::realistic::Spec::new(Kind::Axis, &studies::hidden_of_seed(&effects, seed));
     let dir = std::env::temp_dir().join(format!("mte-test-linear-form-{}", std::process::id()));
-    let truth = write_spec(&spec, seed, &dir).unwrap();
-    let d = mte_diagnose::load(&truth.manifest)
-        .unwrap()
-        .diagnose(&mte_diagnose::DiagnoseParams::default())
-        .unwrap();
+    let truth = xtask::realistic::write_spec(&spec, seed, &dir).unwrap();
+    let d = diagnosed_manifest(&truth.manifest);
     let _ = std::fs::remove_dir_all(&dir);
     let names: Vec<&str> = d.findings.iter().map(|f| f.name.as_str()).collect();
     assert_eq!(names, ["EXX offset drift"]);
