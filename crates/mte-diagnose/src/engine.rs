@@ -598,6 +598,8 @@ pub struct Diagnosis {
     pub residual_series: Vec<ResidualSeries>,
     /// Significance level used.
     pub alpha: f64,
+    /// Smallest relative fall of the held-out RMS a cause had to show ([`DiagnoseParams::min_gain`]).
+    pub min_gain: f64,
     /// The base model in the user's terms (set by [`crate::Prepared::diagnose`]; `None` from
     /// [`diagnose`] on terms alone).
     pub base_model: Option<crate::model::BaseModelUsed>,
@@ -1425,6 +1427,7 @@ fn conclude(
         held_out: None,
         residual_series,
         alpha: params.alpha,
+        min_gain: params.min_gain,
         base_model: None,
     })
 }
@@ -2653,7 +2656,7 @@ impl Searcher<'_> {
                 if ratio < 1.0 - params.min_gain {
                     break pick;
                 }
-                if explain && !passed_over.iter().any(|p: &PassedOver| p.name == t.name) {
+                if explain && !passed_over.iter().any(|p| p.name == t.name) {
                     passed_over.push(PassedOver {
                         name: t.name.to_string(),
                         axis: t.exposed_by.clone().unwrap_or_default(),
@@ -3341,7 +3344,7 @@ impl Searcher<'_> {
     /// How well the periodic cause `ci` (at a free period along a linear axis) predicts the
     /// residuals of the step's model (its fit `projector`) at positions of its axis it was not
     /// fitted to: the axis' distinct positions among the observations of nonzero weight `w` in
-    /// [`SearchParams::folds`] interleaved folds ([`Folds::by_position`]); for each, the cause's
+    /// [`DiagnoseParams::folds`] interleaved folds ([`Folds::by_position`]); for each, the cause's
     /// part beyond the model is fitted to the residuals outside the fold, its period chosen
     /// again on them alone (the grid's best and its other peaks, refined), and predicts the
     /// fold's. The RMS of the fold's residuals with that prediction taken off, as a fraction of
@@ -3382,18 +3385,21 @@ impl Searcher<'_> {
         }
         let (mut without, mut with) = (0.0, 0.0);
         for ((test, rows), profile) in folds.test.iter().zip(&trained).zip(&profiles) {
-            let gain = |c: &DMat| fit_on_rows(&projector.residual_part(c), r, rows).0;
-            let score = Score::new(|t: &Term| -gain(&t.columns));
+            // Each peak's part beyond the model and its fit on the training rows, once.
+            let fitted = |c: &DMat| {
+                let beyond = projector.residual_part(c);
+                let (gain, coefficients) = fit_on_rows(&beyond, r, rows);
+                (gain, beyond, coefficients)
+            };
+            let score = Score::new(|t: &Term| -fitted(&t.columns).0);
             let &(best, top) = profile.iter().max_by(|a, b| a.1.total_cmp(&b.1))?;
-            let columns = grid_peaks(profile, best, top)
+            let (_, beyond, coefficients) = grid_peaks(profile, best, top)
                 .into_iter()
                 .map(|peak| match self.candidate(ci).refine(peak, &score) {
-                    Some(t) => t.columns,
-                    None => self.pool.columns(ci, peak).into_owned(),
+                    Some(t) => fitted(&t.columns),
+                    None => fitted(&self.pool.columns(ci, peak)),
                 })
-                .max_by(|a, b| gain(a).total_cmp(&gain(b)))?;
-            let beyond = projector.residual_part(&columns);
-            let (_, coefficients) = fit_on_rows(&beyond, r, rows);
+                .max_by(|a, b| a.0.total_cmp(&b.0))?;
             for &i in test {
                 without += r[i] * r[i];
                 with += (r[i] - beyond.row(i).transpose().dot(&coefficients)).powi(2);

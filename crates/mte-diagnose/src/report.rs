@@ -402,7 +402,8 @@ pub fn markdown(d: &Diagnosis, title: &str) -> String {
             .collect();
         let _ = writeln!(
             s,
-            "Passed over: periodic errors at a free period that fitted the residuals but did not predict the readings at positions of their axis they were not fitted to (their period chosen on the other positions; a fall of 2 % needed) — structure of another form, not a pitch error these data show: {}.\n",
+            "Passed over: periodic errors at a free period that fitted the residuals but did not predict the readings at positions of their axis they were not fitted to (their period chosen on the other positions; a fall of {:.0} % needed) — structure of another form, not a pitch error these data show: {}.\n",
+            100.0 * d.min_gain,
             items.join("; ")
         );
     }
