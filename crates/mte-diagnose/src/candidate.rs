@@ -310,24 +310,13 @@ impl SlotEffect {
     }
 
     /// The effect of the error `g(s)` whose basis functions `basis` evaluates on the axis
-    /// coordinates `s` (one column per basis function); reference poses included.
+    /// coordinates `s` (one column per basis function); reference poses included. The basis is
+    /// evaluated once per distinct coordinate ([`SlotEffect::spread`]; one basis over rows and
+    /// references together, so a range-normalised basis (Legendre) is the same function at
+    /// both): runs and program cycles repeat their positions.
     fn modulated(&self, values: &[f64], basis: &dyn Fn(&[f64]) -> DMat) -> DMat {
-        let n = self.column.len();
-        match &self.reference {
-            None => {
-                let m = basis(values);
-                DMat::from_fn(n, m.ncols(), |i, j| self.column[i] * m[(i, j)])
-            }
-            // One basis over rows and references together, so a range-normalised basis
-            // (Legendre) is the same function at both.
-            Some(r) => {
-                let at: Vec<f64> = values.iter().chain(&r.coordinate).copied().collect();
-                let m = basis(&at);
-                DMat::from_fn(n, m.ncols(), |i, j| {
-                    self.column[i] * m[(i, j)] + r.column[i] * m[(n + i, j)]
-                })
-            }
-        }
+        let spread = self.spread(values);
+        spread.expand(&basis(spread.values()))
     }
 
     /// How the observations see a function of the slot's axis coordinate, given the rows'
@@ -353,7 +342,7 @@ pub fn physical_effects(
     slots: &[SlotEffect],
     drifting: &[(&Term, Option<&Reference>)],
 ) -> Vec<Box<dyn Candidate>> {
-    let mut out: Vec<Box<dyn Candidate>> = Vec::new();
+    use rayon::prelude::*;
     // Time effects only where a pose is measured again later: otherwise a drift cannot be told
     // from a dependence on the pose. Its time constant may be shorter than the interval between
     // the visits that reveal it, down to a fraction of it ([`shortest_time_constant`]).
@@ -372,232 +361,240 @@ pub fn physical_effects(
         .map(|d| d.values.clone());
     let n = obs.len();
     let settling = time.as_ref().map(|(t, floor)| Settling::new(t, *floor));
-    for slot in slots {
-        if slot.column.iter().all(|v| v.abs() < 1e-15) {
-            continue;
-        }
-        let term = |suffix: &str,
-                    label: String,
-                    meaning: String,
-                    family: Family,
-                    cols: DMat,
-                    q: Quantity| Term {
-            name: format!("{}{suffix}", slot.name),
-            label,
-            meaning,
-            family,
-            coefficients: (0..cols.ncols())
-                .map(|k| (coefficient_name(&slot.name, suffix, k, cols.ncols()), q))
-                .collect(),
-            columns: cols,
-            summary: Summary::EachCoefficient,
-            exposed_by: None,
-            separated_by: slot.separated_by.clone(),
-        };
-        match &slot.role {
-            SlotRole::Constant { family } => {
-                let t = term(
-                    "",
-                    slot.label.clone(),
-                    slot.meaning.clone(),
-                    family.clone(),
-                    column_matrix(&slot.constant_column()),
-                    slot.quantity,
-                );
-                // A squareness shows along the axis it tilts, a rotary axis' location error
-                // against that axis' angle.
-                let t = match located_axis(&slot.name)
-                    .filter(|a| obs.variable(a).is_some_and(|v| varies(&v.values)))
-                {
-                    Some(axis) => t.exposed_by(axis),
-                    None => t,
-                };
-                if let Some(settling) = &settling {
-                    for drift in drift_candidates(&t, slot.reference.as_ref(), settling) {
-                        out.push(Box::new(Requires {
-                            term: t.name.clone(),
-                            inner: drift,
-                        }));
-                    }
-                }
-                out.push(Box::new(t));
+    // Each slot's candidates are independent of the others': built in parallel, collected in
+    // order.
+    let per_slot: Vec<Vec<Box<dyn Candidate>>> = slots
+        .par_iter()
+        .map(|slot| {
+            let mut out: Vec<Box<dyn Candidate>> = Vec::new();
+            if slot.column.iter().all(|v| v.abs() < 1e-15) {
+                return out;
             }
-            SlotRole::Component {
-                axis,
-                positioning,
-                straightness,
-            } => {
-                let Some(v) = obs.variable(axis).filter(|v| varies(&v.values)) else {
-                    continue;
-                };
-                let rotary = v.kind == VariableKind::RotaryAxis;
-                let values = v.values.clone();
-                if *positioning && !rotary {
-                    let cols = slot.modulated(&values, &|s| DMat::from_column_slice(s.len(), 1, s));
-                    let scale = term(
-                        " scale",
-                        format!("scale error of {axis} ({})", slot.name),
-                        format!("positioning error of {axis} growing linearly with position: a scale (pitch or thermal expansion) error of its measuring system"),
-                        Family::Scale,
-                        cols,
-                        Quantity::Ratio,
-                    )
-                    .exposed_by(axis.clone());
-                    // The scale changing in time: the screw or scale expands as the machine
-                    // warms, about the axis' zero (or about a fixed bearing elsewhere, below).
+            let term = |suffix: &str,
+                        label: String,
+                        meaning: String,
+                        family: Family,
+                        cols: DMat,
+                        q: Quantity| Term {
+                name: format!("{}{suffix}", slot.name),
+                label,
+                meaning,
+                family,
+                coefficients: (0..cols.ncols())
+                    .map(|k| (coefficient_name(&slot.name, suffix, k, cols.ncols()), q))
+                    .collect(),
+                columns: cols,
+                summary: Summary::EachCoefficient,
+                exposed_by: None,
+                separated_by: slot.separated_by.clone(),
+            };
+            match &slot.role {
+                SlotRole::Constant { family } => {
+                    let t = term(
+                        "",
+                        slot.label.clone(),
+                        slot.meaning.clone(),
+                        family.clone(),
+                        column_matrix(&slot.constant_column()),
+                        slot.quantity,
+                    );
+                    // A squareness shows along the axis it tilts, a rotary axis' location error
+                    // against that axis' angle.
+                    let t = match located_axis(&slot.name)
+                        .filter(|a| obs.variable(a).is_some_and(|v| varies(&v.values)))
+                    {
+                        Some(axis) => t.exposed_by(axis),
+                        None => t,
+                    };
                     if let Some(settling) = &settling {
-                        let reference = slot.reference.as_ref().map(|r| Reference {
-                            column: r
-                                .column
-                                .component_mul(&DVec::from_column_slice(&r.coordinate)),
-                            ..r.clone()
-                        });
-                        for drift in drift_candidates(&scale, reference.as_ref(), settling) {
+                        for drift in drift_candidates(&t, slot.reference.as_ref(), settling) {
                             out.push(Box::new(Requires {
-                                term: scale.name.clone(),
+                                term: t.name.clone(),
                                 inner: drift,
                             }));
                         }
-                        // The screw fixed at a bearing away from the axis' zero: its scale and
-                        // the axis' zero settle together, with one time constant.
-                        if slot.reference.is_none() {
-                            let zero = zero_of(slot, drifting);
-                            out.push(Box::new(Requires {
-                                term: scale.name.clone(),
-                                inner: Box::new(expansion_about_a_point(
-                                    slot, &zero, axis, &values, settling,
-                                )),
-                            }));
-                        }
                     }
-                    out.push(Box::new(scale));
+                    out.push(Box::new(t));
                 }
-                // The linear part of a straightness is a squareness, which the catalogue names.
-                let first = if *straightness || (*positioning && !rotary) {
-                    2
-                } else {
-                    1
-                };
-                // An error of a rotary axis that turns a full turn repeats every turn: its
-                // harmonics are the periodic candidates; a polynomial in the angle is no error
-                // motion there.
-                let (lo, hi) = crate::basis::range(&values);
-                let full_turn = rotary && hi - lo > 0.8 * std::f64::consts::TAU;
-                let top = CAUSE_DEGREE.min(highest_order(&values, false));
-                for degree in (first..=top).filter(|_| !full_turn) {
-                    let cols = slot.modulated(&values, &|s| legendre_columns(s, first..=degree));
-                    out.push(Box::new(
-                        term(
-                            &format!(" poly{degree}"),
-                            format!("{}, polynomial in {axis} up to degree {degree}", slot.label),
-                            format!("{} varying smoothly along {axis}", slot.meaning),
-                            Family::Component { degree },
+                SlotRole::Component {
+                    axis,
+                    positioning,
+                    straightness,
+                } => {
+                    let Some(v) = obs.variable(axis).filter(|v| varies(&v.values)) else {
+                        return out;
+                    };
+                    let rotary = v.kind == VariableKind::RotaryAxis;
+                    let values = v.values.clone();
+                    if *positioning && !rotary {
+                        let cols = slot.modulated(&values, &|s| DMat::from_column_slice(s.len(), 1, s));
+                        let scale = term(
+                            " scale",
+                            format!("scale error of {axis} ({})", slot.name),
+                            format!("positioning error of {axis} growing linearly with position: a scale (pitch or thermal expansion) error of its measuring system"),
+                            Family::Scale,
                             cols,
-                            slot.quantity,
+                            Quantity::Ratio,
                         )
-                        .exposed_by(axis.clone()),
-                    ));
-                }
-                // A positioning error repeating along the axis; over a full turn, every error
-                // motion of a rotary axis as its harmonics (the form of a bearing race, a
-                // wobble), where no polynomial in the angle is searched.
-                if *positioning || full_turn {
-                    let (name, axis_name, quantity) =
-                        (slot.name.clone(), axis.clone(), slot.quantity);
-                    let (label, what, cause) = if *positioning {
-                        (
-                            format!("periodic positioning error of {axis} ({})", slot.name),
-                            format!("positioning error of {axis}"),
-                            if rotary {
-                                "encoder eccentricity or graduation error, worm-gear tooth error"
-                            } else {
-                                "ball-screw pitch, encoder or gear error"
-                            },
-                        )
-                    } else {
-                        (
-                            format!("{}, periodic over a turn ({})", slot.label, slot.name),
-                            slot.label.clone(),
-                            "the form of a bearing race, a wobble of the axis, an eccentric part",
-                        )
-                    };
-                    let separated_by = slot.separated_by.clone();
-                    let make = move |p: f64, cols: DMat| Term {
-                        name: format!("{name} periodic"),
-                        label: label.clone(),
-                        meaning: format!(
-                            "{what} repeating every {} ({cause})",
-                            format_period(p, rotary),
-                        ),
-                        family: Family::Periodic { period: p },
-                        columns: cols,
-                        coefficients: vec![
-                            (format!("{name} periodic sin"), quantity),
-                            (format!("{name} periodic cos"), quantity),
-                        ],
-                        summary: Summary::Amplitude,
-                        exposed_by: Some(axis_name.clone()),
-                        separated_by: separated_by.clone(),
-                    };
-                    let grid = periods_to_scan(&v.values, rotary);
-                    if !grid.is_empty() {
-                        // The sines at each distinct position once (repeated runs and cycles).
-                        out.push(Box::new(Scan::spread(
-                            grid,
-                            !rotary,
-                            slot.spread(&values),
-                            sin_cos_columns,
-                            make,
-                        )));
+                        .exposed_by(axis.clone());
+                        // The scale changing in time: the screw or scale expands as the machine
+                        // warms, about the axis' zero (or about a fixed bearing elsewhere, below).
+                        if let Some(settling) = &settling {
+                            let reference = slot.reference.as_ref().map(|r| Reference {
+                                column: r
+                                    .column
+                                    .component_mul(&DVec::from_column_slice(&r.coordinate)),
+                                ..r.clone()
+                            });
+                            for drift in drift_candidates(&scale, reference.as_ref(), settling) {
+                                out.push(Box::new(Requires {
+                                    term: scale.name.clone(),
+                                    inner: drift,
+                                }));
+                            }
+                            // The screw fixed at a bearing away from the axis' zero: its scale and
+                            // the axis' zero settle together, with one time constant.
+                            if slot.reference.is_none() {
+                                let zero = zero_of(slot, drifting);
+                                out.push(Box::new(Requires {
+                                    term: scale.name.clone(),
+                                    inner: Box::new(expansion_about_a_point(
+                                        slot, &zero, axis, &values, settling,
+                                    )),
+                                }));
+                            }
+                        }
+                        out.push(Box::new(scale));
                     }
-                    if let Some(d) = direction.as_ref().filter(|_| *positioning) {
-                        let cols = DMat::from_fn(n, 1, |i, _| slot.column[i] * 0.5 * d[i]);
+                    // The linear part of a straightness is a squareness, which the catalogue names.
+                    let first = if *straightness || (*positioning && !rotary) {
+                        2
+                    } else {
+                        1
+                    };
+                    // An error of a rotary axis that turns a full turn repeats every turn: its
+                    // harmonics are the periodic candidates; a polynomial in the angle is no error
+                    // motion there.
+                    let (lo, hi) = crate::basis::range(&values);
+                    let full_turn = rotary && hi - lo > 0.8 * std::f64::consts::TAU;
+                    let top = CAUSE_DEGREE.min(highest_order(&values, false));
+                    for degree in (first..=top).filter(|_| !full_turn) {
+                        let cols = slot.modulated(&values, &|s| legendre_columns(s, first..=degree));
                         out.push(Box::new(
                             term(
-                                " reversal",
-                                format!("reversal error of {axis} ({})", slot.name),
-                                format!("{axis} stops short by a different amount depending on the direction of approach (backlash, friction, encoder hysteresis); the value is the + minus − difference"),
-                                Family::Reversal,
+                                &format!(" poly{degree}"),
+                                format!("{}, polynomial in {axis} up to degree {degree}", slot.label),
+                                format!("{} varying smoothly along {axis}", slot.meaning),
+                                Family::Component { degree },
                                 cols,
                                 slot.quantity,
                             )
-                            .exposed_by("direction"),
+                            .exposed_by(axis.clone()),
                         ));
-                        // A reversal that changes along the axis (the backlash of a screw worn
-                        // where the axis works most, friction that varies along the guideway),
-                        // beside the reversal itself: its change as a polynomial in the axis
-                        // coordinate (ISO 230-2 states the reversal at every target). (Over a
-                        // full turn a rotary axis' reversal would change as harmonics: not
-                        // searched.)
-                        let top = if full_turn {
-                            0
-                        } else {
-                            2.min(highest_order(&values, false))
-                        };
-                        for degree in 1..=top {
-                            let along = legendre_columns(&values, 1..=degree);
-                            let cols = DMat::from_fn(n, degree, |i, j| {
-                                slot.column[i] * 0.5 * d[i] * along[(i, j)]
-                            });
-                            let changing = term(
-                                &format!(" reversal poly{degree}"),
-                                format!("reversal error of {axis} changing along {axis}, polynomial up to degree {degree}"),
-                                format!("the reversal of {axis} is not the same at every position: larger where the screw is worn or the guideway's friction higher (the coefficients are Legendre's over the measured travel: the first is half the reversal's change from one end to the other)"),
-                                Family::Reversal,
-                                cols,
-                                slot.quantity,
+                    }
+                    // A positioning error repeating along the axis; over a full turn, every error
+                    // motion of a rotary axis as its harmonics (the form of a bearing race, a
+                    // wobble), where no polynomial in the angle is searched.
+                    if *positioning || full_turn {
+                        let (name, axis_name, quantity) =
+                            (slot.name.clone(), axis.clone(), slot.quantity);
+                        let (label, what, cause) = if *positioning {
+                            (
+                                format!("periodic positioning error of {axis} ({})", slot.name),
+                                format!("positioning error of {axis}"),
+                                if rotary {
+                                    "encoder eccentricity or graduation error, worm-gear tooth error"
+                                } else {
+                                    "ball-screw pitch, encoder or gear error"
+                                },
                             )
-                            .exposed_by(axis.clone());
-                            out.push(Box::new(Requires {
-                                term: format!("{} reversal", slot.name),
-                                inner: Box::new(changing),
-                            }));
+                        } else {
+                            (
+                                format!("{}, periodic over a turn ({})", slot.label, slot.name),
+                                slot.label.clone(),
+                                "the form of a bearing race, a wobble of the axis, an eccentric part",
+                            )
+                        };
+                        let separated_by = slot.separated_by.clone();
+                        let make = move |p: f64, cols: DMat| Term {
+                            name: format!("{name} periodic"),
+                            label: label.clone(),
+                            meaning: format!(
+                                "{what} repeating every {} ({cause})",
+                                format_period(p, rotary),
+                            ),
+                            family: Family::Periodic { period: p },
+                            columns: cols,
+                            coefficients: vec![
+                                (format!("{name} periodic sin"), quantity),
+                                (format!("{name} periodic cos"), quantity),
+                            ],
+                            summary: Summary::Amplitude,
+                            exposed_by: Some(axis_name.clone()),
+                            separated_by: separated_by.clone(),
+                        };
+                        let grid = periods_to_scan(&v.values, rotary);
+                        if !grid.is_empty() {
+                            // The sines at each distinct position once (repeated runs and cycles).
+                            out.push(Box::new(Scan::spread(
+                                grid,
+                                !rotary,
+                                slot.spread(&values),
+                                sin_cos_columns,
+                                make,
+                            )));
+                        }
+                        if let Some(d) = direction.as_ref().filter(|_| *positioning) {
+                            let cols = DMat::from_fn(n, 1, |i, _| slot.column[i] * 0.5 * d[i]);
+                            out.push(Box::new(
+                                term(
+                                    " reversal",
+                                    format!("reversal error of {axis} ({})", slot.name),
+                                    format!("{axis} stops short by a different amount depending on the direction of approach (backlash, friction, encoder hysteresis); the value is the + minus − difference"),
+                                    Family::Reversal,
+                                    cols,
+                                    slot.quantity,
+                                )
+                                .exposed_by("direction"),
+                            ));
+                            // A reversal that changes along the axis (the backlash of a screw worn
+                            // where the axis works most, friction that varies along the guideway),
+                            // beside the reversal itself: its change as a polynomial in the axis
+                            // coordinate (ISO 230-2 states the reversal at every target). (Over a
+                            // full turn a rotary axis' reversal would change as harmonics: not
+                            // searched.)
+                            let top = if full_turn {
+                                0
+                            } else {
+                                2.min(highest_order(&values, false))
+                            };
+                            for degree in 1..=top {
+                                let along = legendre_columns(&values, 1..=degree);
+                                let cols = DMat::from_fn(n, degree, |i, j| {
+                                    slot.column[i] * 0.5 * d[i] * along[(i, j)]
+                                });
+                                let changing = term(
+                                    &format!(" reversal poly{degree}"),
+                                    format!("reversal error of {axis} changing along {axis}, polynomial up to degree {degree}"),
+                                    format!("the reversal of {axis} is not the same at every position: larger where the screw is worn or the guideway's friction higher (the coefficients are Legendre's over the measured travel: the first is half the reversal's change from one end to the other)"),
+                                    Family::Reversal,
+                                    cols,
+                                    slot.quantity,
+                                )
+                                .exposed_by(axis.clone());
+                                out.push(Box::new(Requires {
+                                    term: format!("{} reversal", slot.name),
+                                    inner: Box::new(changing),
+                                }));
+                            }
                         }
                     }
                 }
             }
-        }
-    }
+            out
+        })
+        .collect();
+    let mut out: Vec<Box<dyn Candidate>> = per_slot.into_iter().flatten().collect();
     if let Some(settling) = &settling {
         for &(t, reference) in drifting {
             if t.width() == 1 && !matches!(t.family, Family::Drift { .. }) {

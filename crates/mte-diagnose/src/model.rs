@@ -254,11 +254,12 @@ pub fn prepare(
     };
     let mut base = effects.instrument;
     let n_instrument = base.len();
-    base.extend(
-        spec.terms(&observations, &effects.errors, &effects.location, &named)
-            .map_err(field_error)?,
+    // (Independent: built together.)
+    let (terms, completions) = rayon::join(
+        || spec.terms(&observations, &effects.errors, &effects.location, &named),
+        || spec.completions(&observations, &effects.errors),
     );
-    let completions = spec.completions(&observations, &effects.errors);
+    base.extend(terms.map_err(field_error)?);
     let drifting: Vec<&Term> = match effects.drift {
         DriftOf::Nothing => Vec::new(),
         DriftOf::Instrument => base[..n_instrument].iter().collect(),
