@@ -42,13 +42,15 @@ const USAGE: &str = "usage: cargo xtask <reproduce [seed000|seed002|seed003|seed
 /// once, as the studies' combined cells do (the k-th of one family on the k-th axis), against
 /// the user's model of a real machine.
 /// `--cycles`: R-test measurement cycles; `--targets`: tracker targets (the benches' sizes:
-/// 8 cycles, 400 targets); `--wavy`: the false-discovery study's wavier ordinary errors.
+/// 8 cycles, 400 targets); `--wavy`: the false-discovery study's wavier ordinary errors;
+/// `--noise-scale`: the noise σ times this (0.01: nearly noise-free readings, to tell an
+/// estimate's bias from its scatter).
 /// `c-stage` writes the 3-D points of a C table with a calibrated
 /// target, the C line's location errors and a scale error of X (the bundled
 /// `fixtures/datasets/c-stage-points/` is seed 1); `points` the studies' realistic ones, every
 /// ordinary error of that machine at once.
 fn run_realistic(args: &[String]) -> Result<(), String> {
-    const USAGE: &str = "usage: cargo xtask realistic <axis|tracker|tracker-tools|rtest|rtest-head|rtest-ac|points|points-targets|rotary|c-stage> <seed> <dir> [--hidden EFFECT SIZE] [--cycles N] [--targets N] [--wavy]";
+    const USAGE: &str = "usage: cargo xtask realistic <axis|tracker|tracker-tools|rtest|rtest-head|rtest-ac|points|points-targets|rotary|c-stage> <seed> <dir> [--hidden EFFECT SIZE] [--cycles N] [--targets N] [--wavy] [--noise-scale F]";
     let (positional, options) = args.split_at(args.len().min(3));
     let [kind, seed, dir] = positional else {
         return Err(USAGE.into());
@@ -58,6 +60,7 @@ fn run_realistic(args: &[String]) -> Result<(), String> {
         v.parse().map_err(|e| format!("{flag} `{v}`: {e}"))
     };
     let (mut hidden, mut cycles, mut targets, mut wavy) = (Vec::new(), None, None, false);
+    let mut noise_scale: Option<f64> = None;
     let mut rest = options.iter();
     while let Some(flag) = rest.next() {
         match flag.as_str() {
@@ -77,6 +80,15 @@ fn run_realistic(args: &[String]) -> Result<(), String> {
             "--cycles" => cycles = Some(count(flag, rest.next())?),
             "--targets" => targets = Some(count(flag, rest.next())?),
             "--wavy" => wavy = true,
+            "--noise-scale" => {
+                let v = rest
+                    .next()
+                    .ok_or_else(|| format!("--noise-scale: expected a number\n{USAGE}"))?;
+                noise_scale = match v.parse::<f64>() {
+                    Ok(s) if s.is_finite() && s >= 0.0 => Some(s),
+                    _ => return Err(format!("--noise-scale `{v}`: expected a number ≥ 0")),
+                };
+            }
             other => return Err(format!("option `{other}`: unknown\n{USAGE}")),
         }
     }
@@ -107,6 +119,9 @@ fn run_realistic(args: &[String]) -> Result<(), String> {
     let mut spec = xtask::realistic::Spec::new(kind, &hidden);
     if let [(effect, _)] = effects[..] {
         spec.base_model = xtask::studies::user_model_lacking(kind, effect);
+    }
+    if let Some(s) = noise_scale {
+        spec.noise_scale = s;
     }
     spec.cycles = cycles;
     spec.targets = targets;
