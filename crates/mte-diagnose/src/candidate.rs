@@ -1896,6 +1896,47 @@ mod tests {
     use super::*;
 
     #[test]
+    fn a_slot_sees_a_function_of_its_axis_at_each_row_and_at_its_reference_pose() {
+        // Six rows at three positions (repeated, as runs repeat them), each seen with its own
+        // sensitivity and, with the opposite one, at its set-up's reference position.
+        let values = [10.0, -5.0, 10.0, 2.5, -5.0, 10.0];
+        let slot = SlotEffect {
+            name: "EXX".into(),
+            label: "positioning of X".into(),
+            meaning: String::new(),
+            quantity: Quantity::Length,
+            role: SlotRole::Component {
+                axis: "X".into(),
+                positioning: true,
+                straightness: false,
+            },
+            column: DVec::from_column_slice(&[1.0, 0.5, -1.0, 2.0, 0.25, 1.5]),
+            separated_by: None,
+            reference: Some(Reference {
+                column: DVec::from_column_slice(&[-1.0, -0.5, 1.0, -2.0, -0.25, -1.5]),
+                coordinate: vec![0.0, 0.0, 0.0, -10.0, -10.0, -10.0],
+                time_s: vec![0.0; 6],
+            }),
+        };
+        // g(s) = (s, s²): by definition, column·g(s) + reference column·g(s_ref).
+        let basis = |s: &[f64]| DMat::from_fn(s.len(), 2, |i, j| s[i].powi(j as i32 + 1));
+        let m = slot.modulated(&values, &basis);
+        let r = slot.reference.as_ref().expect("a reference");
+        for (i, &s) in values.iter().enumerate() {
+            for j in 0..2 {
+                let g = |s: f64| s.powi(j as i32 + 1);
+                let expected = slot.column[i] * g(s) + r.column[i] * g(r.coordinate[i]);
+                assert_eq!(m[(i, j)], expected, "row {i}, function {j}");
+            }
+        }
+        // A range-normalised basis is one function over rows and references together: Legendre's
+        // first degree is −1 at the lowest of all (the reference's −10) and 1 at the highest.
+        let legendre = slot.modulated(&values, &|s| crate::basis::legendre_columns(s, 1..=1));
+        let unit = |v: f64| 2.0 * (v + 10.0) / 20.0 - 1.0;
+        assert!((legendre[(3, 0)] - (2.0 * unit(2.5) - 2.0 * unit(-10.0))).abs() < 1e-12);
+    }
+
+    #[test]
     fn a_base_model_is_described_in_its_own_terms_and_knows_which_ordinary_errors_it_lacks() {
         let location = ["EX0C".to_string(), "EY0C".into(), "EX0C abs".into()];
         let r_test = BaseModelSpec {
