@@ -359,23 +359,45 @@ pub fn physical_effects(
         .variable_of_kind(VariableKind::Direction)
         .filter(|d| varies(&d.values))
         .map(|d| d.values.clone());
-    let n = obs.len();
     let settling = time.as_ref().map(|(t, floor)| Settling::new(t, *floor));
     // Each slot's candidates are independent of the others': built in parallel, collected in
     // order.
     let per_slot: Vec<Vec<Box<dyn Candidate>>> = slots
         .par_iter()
-        .map(|slot| {
-            let mut out: Vec<Box<dyn Candidate>> = Vec::new();
-            if slot.column.iter().all(|v| v.abs() < 1e-15) {
-                return out;
+        .map(|slot| slot_candidates(obs, slot, drifting, settling.as_ref(), direction.as_deref()))
+        .collect();
+    let mut out: Vec<Box<dyn Candidate>> = per_slot.into_iter().flatten().collect();
+    if let Some(settling) = &settling {
+        for &(t, reference) in drifting {
+            if t.width() == 1 && !matches!(t.family, Family::Drift { .. }) {
+                out.extend(drift_candidates(t, reference, settling));
             }
-            let term = |suffix: &str,
-                        label: String,
-                        meaning: String,
-                        family: Family,
-                        cols: DMat,
-                        q: Quantity| Term {
+        }
+    }
+    out
+}
+
+/// The candidates of one slot's error ([`physical_effects`]): its constant and drifts for a
+/// constant error; for a component error its polynomials, a linear axis' scale and its drifts,
+/// a positioning error's periodic errors along the axis and reversals, a rotary axis' error
+/// motions as harmonics of a turn. `drifting`: the base terms that drift (an axis' zero among
+/// them, about which its scale expands); `settling`: the drifts' time course where a pose is
+/// measured again later; `direction`: each reading's direction of approach where it varies.
+fn slot_candidates(
+    obs: &Observations,
+    slot: &SlotEffect,
+    drifting: &[(&Term, Option<&Reference>)],
+    settling: Option<&Settling>,
+    direction: Option<&[f64]>,
+) -> Vec<Box<dyn Candidate>> {
+    let n = obs.len();
+    let mut out: Vec<Box<dyn Candidate>> = Vec::new();
+    if slot.column.iter().all(|v| v.abs() < 1e-15) {
+        return out;
+    }
+    let term =
+        |suffix: &str, label: String, meaning: String, family: Family, cols: DMat, q: Quantity| {
+            Term {
                 name: format!("{}{suffix}", slot.name),
                 label,
                 meaning,
@@ -387,218 +409,207 @@ pub fn physical_effects(
                 summary: Summary::EachCoefficient,
                 exposed_by: None,
                 separated_by: slot.separated_by.clone(),
+            }
+        };
+    match &slot.role {
+        SlotRole::Constant { family } => {
+            let t = term(
+                "",
+                slot.label.clone(),
+                slot.meaning.clone(),
+                family.clone(),
+                column_matrix(&slot.constant_column()),
+                slot.quantity,
+            );
+            // A squareness shows along the axis it tilts, a rotary axis' location error
+            // against that axis' angle.
+            let t = match located_axis(&slot.name)
+                .filter(|a| obs.variable(a).is_some_and(|v| varies(&v.values)))
+            {
+                Some(axis) => t.exposed_by(axis),
+                None => t,
             };
-            match &slot.role {
-                SlotRole::Constant { family } => {
-                    let t = term(
-                        "",
-                        slot.label.clone(),
-                        slot.meaning.clone(),
-                        family.clone(),
-                        column_matrix(&slot.constant_column()),
-                        slot.quantity,
-                    );
-                    // A squareness shows along the axis it tilts, a rotary axis' location error
-                    // against that axis' angle.
-                    let t = match located_axis(&slot.name)
-                        .filter(|a| obs.variable(a).is_some_and(|v| varies(&v.values)))
-                    {
-                        Some(axis) => t.exposed_by(axis),
-                        None => t,
-                    };
-                    if let Some(settling) = &settling {
-                        for drift in drift_candidates(&t, slot.reference.as_ref(), settling) {
-                            out.push(Box::new(Requires {
-                                term: t.name.clone(),
-                                inner: drift,
-                            }));
-                        }
-                    }
-                    out.push(Box::new(t));
-                }
-                SlotRole::Component {
-                    axis,
-                    positioning,
-                    straightness,
-                } => {
-                    let Some(v) = obs.variable(axis).filter(|v| varies(&v.values)) else {
-                        return out;
-                    };
-                    let rotary = v.kind == VariableKind::RotaryAxis;
-                    let values = v.values.clone();
-                    if *positioning && !rotary {
-                        let cols = slot.modulated(&values, &|s| DMat::from_column_slice(s.len(), 1, s));
-                        let scale = term(
-                            " scale",
-                            format!("scale error of {axis} ({})", slot.name),
-                            format!("positioning error of {axis} growing linearly with position: a scale (pitch or thermal expansion) error of its measuring system"),
-                            Family::Scale,
-                            cols,
-                            Quantity::Ratio,
-                        )
-                        .exposed_by(axis.clone());
-                        // The scale changing in time: the screw or scale expands as the machine
-                        // warms, about the axis' zero (or about a fixed bearing elsewhere, below).
-                        if let Some(settling) = &settling {
-                            let reference = slot.reference.as_ref().map(|r| Reference {
-                                column: r
-                                    .column
-                                    .component_mul(&DVec::from_column_slice(&r.coordinate)),
-                                ..r.clone()
-                            });
-                            for drift in drift_candidates(&scale, reference.as_ref(), settling) {
-                                out.push(Box::new(Requires {
-                                    term: scale.name.clone(),
-                                    inner: drift,
-                                }));
-                            }
-                            // The screw fixed at a bearing away from the axis' zero: its scale and
-                            // the axis' zero settle together, with one time constant.
-                            if slot.reference.is_none() {
-                                let zero = zero_of(slot, drifting);
-                                out.push(Box::new(Requires {
-                                    term: scale.name.clone(),
-                                    inner: Box::new(expansion_about_a_point(
-                                        slot, &zero, axis, &values, settling,
-                                    )),
-                                }));
-                            }
-                        }
-                        out.push(Box::new(scale));
-                    }
-                    // The linear part of a straightness is a squareness, which the catalogue names.
-                    let first = if *straightness || (*positioning && !rotary) {
-                        2
-                    } else {
-                        1
-                    };
-                    // An error of a rotary axis that turns a full turn repeats every turn: its
-                    // harmonics are the periodic candidates; a polynomial in the angle is no error
-                    // motion there.
-                    let (lo, hi) = crate::basis::range(&values);
-                    let full_turn = rotary && hi - lo > 0.8 * std::f64::consts::TAU;
-                    let top = CAUSE_DEGREE.min(highest_order(&values, false));
-                    for degree in (first..=top).filter(|_| !full_turn) {
-                        let cols = slot.modulated(&values, &|s| legendre_columns(s, first..=degree));
-                        out.push(Box::new(
-                            term(
-                                &format!(" poly{degree}"),
-                                format!("{}, polynomial in {axis} up to degree {degree}", slot.label),
-                                format!("{} varying smoothly along {axis}", slot.meaning),
-                                Family::Component { degree },
-                                cols,
-                                slot.quantity,
-                            )
-                            .exposed_by(axis.clone()),
-                        ));
-                    }
-                    // A positioning error repeating along the axis; over a full turn, every error
-                    // motion of a rotary axis as its harmonics (the form of a bearing race, a
-                    // wobble), where no polynomial in the angle is searched.
-                    if *positioning || full_turn {
-                        let (name, axis_name, quantity) =
-                            (slot.name.clone(), axis.clone(), slot.quantity);
-                        let (label, what, cause) = if *positioning {
-                            (
-                                format!("periodic positioning error of {axis} ({})", slot.name),
-                                format!("positioning error of {axis}"),
-                                if rotary {
-                                    "encoder eccentricity or graduation error, worm-gear tooth error"
-                                } else {
-                                    "ball-screw pitch, encoder or gear error"
-                                },
-                            )
-                        } else {
-                            (
-                                format!("{}, periodic over a turn ({})", slot.label, slot.name),
-                                slot.label.clone(),
-                                "the form of a bearing race, a wobble of the axis, an eccentric part",
-                            )
-                        };
-                        let separated_by = slot.separated_by.clone();
-                        let make = move |p: f64, cols: DMat| Term {
-                            name: format!("{name} periodic"),
-                            label: label.clone(),
-                            meaning: format!(
-                                "{what} repeating every {} ({cause})",
-                                format_period(p, rotary),
-                            ),
-                            family: Family::Periodic { period: p },
-                            columns: cols,
-                            coefficients: vec![
-                                (format!("{name} periodic sin"), quantity),
-                                (format!("{name} periodic cos"), quantity),
-                            ],
-                            summary: Summary::Amplitude,
-                            exposed_by: Some(axis_name.clone()),
-                            separated_by: separated_by.clone(),
-                        };
-                        let grid = periods_to_scan(&v.values, rotary);
-                        if !grid.is_empty() {
-                            // The sines at each distinct position once (repeated runs and cycles).
-                            out.push(Box::new(Scan::spread(
-                                grid,
-                                !rotary,
-                                slot.spread(&values),
-                                sin_cos_columns,
-                                make,
-                            )));
-                        }
-                        if let Some(d) = direction.as_ref().filter(|_| *positioning) {
-                            let cols = DMat::from_fn(n, 1, |i, _| slot.column[i] * 0.5 * d[i]);
-                            out.push(Box::new(
-                                term(
-                                    " reversal",
-                                    format!("reversal error of {axis} ({})", slot.name),
-                                    format!("{axis} stops short by a different amount depending on the direction of approach (backlash, friction, encoder hysteresis); the value is the + minus − difference"),
-                                    Family::Reversal,
-                                    cols,
-                                    slot.quantity,
-                                )
-                                .exposed_by("direction"),
-                            ));
-                            // A reversal that changes along the axis (the backlash of a screw worn
-                            // where the axis works most, friction that varies along the guideway),
-                            // beside the reversal itself: its change as a polynomial in the axis
-                            // coordinate (ISO 230-2 states the reversal at every target). (Over a
-                            // full turn a rotary axis' reversal would change as harmonics: not
-                            // searched.)
-                            let top = if full_turn {
-                                0
-                            } else {
-                                2.min(highest_order(&values, false))
-                            };
-                            for degree in 1..=top {
-                                let along = legendre_columns(&values, 1..=degree);
-                                let cols = DMat::from_fn(n, degree, |i, j| {
-                                    slot.column[i] * 0.5 * d[i] * along[(i, j)]
-                                });
-                                let changing = term(
-                                    &format!(" reversal poly{degree}"),
-                                    format!("reversal error of {axis} changing along {axis}, polynomial up to degree {degree}"),
-                                    format!("the reversal of {axis} is not the same at every position: larger where the screw is worn or the guideway's friction higher (the coefficients are Legendre's over the measured travel: the first is half the reversal's change from one end to the other)"),
-                                    Family::Reversal,
-                                    cols,
-                                    slot.quantity,
-                                )
-                                .exposed_by(axis.clone());
-                                out.push(Box::new(Requires {
-                                    term: format!("{} reversal", slot.name),
-                                    inner: Box::new(changing),
-                                }));
-                            }
-                        }
-                    }
+            if let Some(settling) = &settling {
+                for drift in drift_candidates(&t, slot.reference.as_ref(), settling) {
+                    out.push(Box::new(Requires {
+                        term: t.name.clone(),
+                        inner: drift,
+                    }));
                 }
             }
-            out
-        })
-        .collect();
-    let mut out: Vec<Box<dyn Candidate>> = per_slot.into_iter().flatten().collect();
-    if let Some(settling) = &settling {
-        for &(t, reference) in drifting {
-            if t.width() == 1 && !matches!(t.family, Family::Drift { .. }) {
-                out.extend(drift_candidates(t, reference, settling));
+            out.push(Box::new(t));
+        }
+        SlotRole::Component {
+            axis,
+            positioning,
+            straightness,
+        } => {
+            let Some(v) = obs.variable(axis).filter(|v| varies(&v.values)) else {
+                return out;
+            };
+            let rotary = v.kind == VariableKind::RotaryAxis;
+            let values = v.values.clone();
+            if *positioning && !rotary {
+                let cols = slot.modulated(&values, &|s| DMat::from_column_slice(s.len(), 1, s));
+                let scale = term(
+                    " scale",
+                    format!("scale error of {axis} ({})", slot.name),
+                    format!("positioning error of {axis} growing linearly with position: a scale (pitch or thermal expansion) error of its measuring system"),
+                    Family::Scale,
+                    cols,
+                    Quantity::Ratio,
+                )
+                .exposed_by(axis.clone());
+                // The scale changing in time: the screw or scale expands as the machine
+                // warms, about the axis' zero (or about a fixed bearing elsewhere, below).
+                if let Some(settling) = &settling {
+                    let reference = slot.reference.as_ref().map(|r| Reference {
+                        column: r
+                            .column
+                            .component_mul(&DVec::from_column_slice(&r.coordinate)),
+                        ..r.clone()
+                    });
+                    for drift in drift_candidates(&scale, reference.as_ref(), settling) {
+                        out.push(Box::new(Requires {
+                            term: scale.name.clone(),
+                            inner: drift,
+                        }));
+                    }
+                    // The screw fixed at a bearing away from the axis' zero: its scale and
+                    // the axis' zero settle together, with one time constant.
+                    if slot.reference.is_none() {
+                        let zero = zero_of(slot, drifting);
+                        out.push(Box::new(Requires {
+                            term: scale.name.clone(),
+                            inner: Box::new(expansion_about_a_point(
+                                slot, &zero, axis, &values, settling,
+                            )),
+                        }));
+                    }
+                }
+                out.push(Box::new(scale));
+            }
+            // The linear part of a straightness is a squareness, which the catalogue names.
+            let first = if *straightness || (*positioning && !rotary) {
+                2
+            } else {
+                1
+            };
+            // An error of a rotary axis that turns a full turn repeats every turn: its
+            // harmonics are the periodic candidates; a polynomial in the angle is no error
+            // motion there.
+            let (lo, hi) = crate::basis::range(&values);
+            let full_turn = rotary && hi - lo > 0.8 * std::f64::consts::TAU;
+            let top = CAUSE_DEGREE.min(highest_order(&values, false));
+            for degree in (first..=top).filter(|_| !full_turn) {
+                let cols = slot.modulated(&values, &|s| legendre_columns(s, first..=degree));
+                out.push(Box::new(
+                    term(
+                        &format!(" poly{degree}"),
+                        format!("{}, polynomial in {axis} up to degree {degree}", slot.label),
+                        format!("{} varying smoothly along {axis}", slot.meaning),
+                        Family::Component { degree },
+                        cols,
+                        slot.quantity,
+                    )
+                    .exposed_by(axis.clone()),
+                ));
+            }
+            // A positioning error repeating along the axis; over a full turn, every error
+            // motion of a rotary axis as its harmonics (the form of a bearing race, a
+            // wobble), where no polynomial in the angle is searched.
+            if *positioning || full_turn {
+                let (name, axis_name, quantity) = (slot.name.clone(), axis.clone(), slot.quantity);
+                let (label, what, cause) = if *positioning {
+                    (
+                        format!("periodic positioning error of {axis} ({})", slot.name),
+                        format!("positioning error of {axis}"),
+                        if rotary {
+                            "encoder eccentricity or graduation error, worm-gear tooth error"
+                        } else {
+                            "ball-screw pitch, encoder or gear error"
+                        },
+                    )
+                } else {
+                    (
+                        format!("{}, periodic over a turn ({})", slot.label, slot.name),
+                        slot.label.clone(),
+                        "the form of a bearing race, a wobble of the axis, an eccentric part",
+                    )
+                };
+                let separated_by = slot.separated_by.clone();
+                let make = move |p: f64, cols: DMat| Term {
+                    name: format!("{name} periodic"),
+                    label: label.clone(),
+                    meaning: format!(
+                        "{what} repeating every {} ({cause})",
+                        format_period(p, rotary),
+                    ),
+                    family: Family::Periodic { period: p },
+                    columns: cols,
+                    coefficients: vec![
+                        (format!("{name} periodic sin"), quantity),
+                        (format!("{name} periodic cos"), quantity),
+                    ],
+                    summary: Summary::Amplitude,
+                    exposed_by: Some(axis_name.clone()),
+                    separated_by: separated_by.clone(),
+                };
+                let grid = periods_to_scan(&v.values, rotary);
+                if !grid.is_empty() {
+                    // The sines at each distinct position once (repeated runs and cycles).
+                    out.push(Box::new(Scan::spread(
+                        grid,
+                        !rotary,
+                        slot.spread(&values),
+                        sin_cos_columns,
+                        make,
+                    )));
+                }
+                if let Some(d) = direction.as_ref().filter(|_| *positioning) {
+                    let cols = DMat::from_fn(n, 1, |i, _| slot.column[i] * 0.5 * d[i]);
+                    out.push(Box::new(
+                        term(
+                            " reversal",
+                            format!("reversal error of {axis} ({})", slot.name),
+                            format!("{axis} stops short by a different amount depending on the direction of approach (backlash, friction, encoder hysteresis); the value is the + minus − difference"),
+                            Family::Reversal,
+                            cols,
+                            slot.quantity,
+                        )
+                        .exposed_by("direction"),
+                    ));
+                    // A reversal that changes along the axis (the backlash of a screw worn
+                    // where the axis works most, friction that varies along the guideway),
+                    // beside the reversal itself: its change as a polynomial in the axis
+                    // coordinate (ISO 230-2 states the reversal at every target). (Over a
+                    // full turn a rotary axis' reversal would change as harmonics: not
+                    // searched.)
+                    let top = if full_turn {
+                        0
+                    } else {
+                        2.min(highest_order(&values, false))
+                    };
+                    for degree in 1..=top {
+                        let along = legendre_columns(&values, 1..=degree);
+                        let cols = DMat::from_fn(n, degree, |i, j| {
+                            slot.column[i] * 0.5 * d[i] * along[(i, j)]
+                        });
+                        let changing = term(
+                            &format!(" reversal poly{degree}"),
+                            format!("reversal error of {axis} changing along {axis}, polynomial up to degree {degree}"),
+                            format!("the reversal of {axis} is not the same at every position: larger where the screw is worn or the guideway's friction higher (the coefficients are Legendre's over the measured travel: the first is half the reversal's change from one end to the other)"),
+                            Family::Reversal,
+                            cols,
+                            slot.quantity,
+                        )
+                        .exposed_by(axis.clone());
+                        out.push(Box::new(Requires {
+                            term: format!("{} reversal", slot.name),
+                            inner: Box::new(changing),
+                        }));
+                    }
+                }
             }
         }
     }
