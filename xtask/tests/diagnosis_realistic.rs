@@ -14,23 +14,25 @@ const SEED: u64 = 2026;
 
 /// The diagnosis, with the default settings, of the dataset `spec` writes from `seed`.
 fn diagnosed(spec: &xtask::realistic::Spec, seed: u64) -> mte_diagnose::Diagnosis {
-    let dir = std::env::temp_dir().join(format!("mte-test-{}-{seed}", std::process::id()));
-    let truth = xtask::realistic::write_spec(spec, seed, &dir).unwrap();
-    let d = diagnosed_manifest(&truth.manifest);
-    let _ = std::fs::remove_dir_all(&dir);
-    d
+    truth_and_diagnosis(spec, seed, false).1
 }
 
-/// The truth of the R-test dataset `spec` writes from `seed` and its diagnosis with the default
-/// settings, its noise stated as the studies state it (an R-test manifest states none).
-fn diagnosed_with_stated_noise(
+/// The truth of the dataset `spec` writes from `seed` and its diagnosis with the default
+/// settings; with `state_noise`, the noise stated as the studies state it to an R-test, whose
+/// manifest states none.
+fn truth_and_diagnosis(
     spec: &xtask::realistic::Spec,
     seed: u64,
+    state_noise: bool,
 ) -> (xtask::realistic::Truth, mte_diagnose::Diagnosis) {
-    let dir = std::env::temp_dir().join(format!("mte-test-noise-{}-{seed}", std::process::id()));
+    let dir = std::env::temp_dir().join(format!(
+        "mte-test-{}-{}-{seed}",
+        spec.kind.name(),
+        std::process::id()
+    ));
     let truth = xtask::realistic::write_spec(spec, seed, &dir).unwrap();
-    let noise = xtask::realistic::axis::stated_noise(truth.noise_um);
-    let d = mte_diagnose::load_with_noise(&truth.manifest, Some(noise))
+    let noise = state_noise.then(|| xtask::realistic::axis::stated_noise(truth.noise_um));
+    let d = mte_diagnose::load_with_noise(&truth.manifest, noise)
         .unwrap()
         .diagnose(&mte_diagnose::DiagnoseParams::default())
         .unwrap();
@@ -117,7 +119,7 @@ fn a_pitch_fitting_what_missing_ordinary_errors_leave_is_passed_over() {
         let seed = studies::dataset_seed(1, "fdr-rtest", index);
         let mut spec = xtask::realistic::Spec::new(Kind::Rtest, &[]);
         spec.base_model = xtask::realistic::BaseModel::Omit;
-        let (_, d) = diagnosed_with_stated_noise(&spec, seed);
+        let (_, d) = truth_and_diagnosis(&spec, seed, true);
         let names: Vec<&str> = d.findings.iter().map(|f| f.name.as_str()).collect();
         assert!(
             !names.iter().any(|n| n.starts_with("EYY periodic")),
@@ -247,7 +249,7 @@ fn a_first_order_drift_that_entered_in_linear_form_is_given_its_first_order_cour
     let effects = [(Effect::PivotDrift, 10.0), (Effect::SpindleDrift, 10.0)];
     let seed = studies::dataset_seed(1, "combined-rtest-PivotDrift-10-SpindleDrift-10", 3);
     let spec = Spec::new(Kind::Rtest, &studies::hidden_of_seed(&effects, seed));
-    let (truth, d) = diagnosed_with_stated_noise(&spec, seed);
+    let (truth, d) = truth_and_diagnosis(&spec, seed, true);
     let names: Vec<&str> = d.findings.iter().map(|f| f.name.as_str()).collect();
     assert_eq!(d.findings.len(), 2, "{names:?}");
     for f in &d.findings {
@@ -308,10 +310,7 @@ fn a_first_order_form_that_did_not_earn_its_time_constant_gives_way_to_the_linea
     let effects = [(Effect::ZeroDrift, 0.1)];
     let seed = studies::dataset_seed(1, "power-axis-ZeroDrift-0.1", 13);
     let spec = xtask::realistic::Spec::new(Kind::Axis, &studies::hidden_of_seed(&effects, seed));
-    let dir = std::env::temp_dir().join(format!("mte-test-linear-form-{}", std::process::id()));
-    let truth = xtask::realistic::write_spec(&spec, seed, &dir).unwrap();
-    let d = diagnosed_manifest(&truth.manifest);
-    let _ = std::fs::remove_dir_all(&dir);
+    let (truth, d) = truth_and_diagnosis(&spec, seed, false);
     let names: Vec<&str> = d.findings.iter().map(|f| f.name.as_str()).collect();
     assert_eq!(names, ["EXX offset drift"]);
     assert!(
