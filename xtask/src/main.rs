@@ -44,13 +44,15 @@ const USAGE: &str = "usage: cargo xtask <reproduce [seed000|seed002|seed003|seed
 /// `--cycles`: R-test measurement cycles; `--targets`: tracker targets (the benches' sizes:
 /// 8 cycles, 400 targets); `--wavy`: the false-discovery study's wavier ordinary errors;
 /// `--noise-scale`: the noise σ times this (0.01: nearly noise-free readings, to tell an
-/// estimate's bias from its scatter).
+/// estimate's bias from its scatter); `--noise-seed S`: the same machine with another draw of
+/// the noise, from its own stream of seed `S` (two draws' estimates differ by the scatter
+/// alone: their difference against their u tells a wrong u from a bias).
 /// `c-stage` writes the 3-D points of a C table with a calibrated
 /// target, the C line's location errors and a scale error of X (the bundled
 /// `fixtures/datasets/c-stage-points/` is seed 1); `points` the studies' realistic ones, every
 /// ordinary error of that machine at once.
 fn run_realistic(args: &[String]) -> Result<(), String> {
-    const USAGE: &str = "usage: cargo xtask realistic <axis|tracker|tracker-tools|rtest|rtest-head|rtest-ac|points|points-targets|rotary|c-stage> <seed> <dir> [--hidden EFFECT SIZE] [--cycles N] [--targets N] [--wavy] [--noise-scale F]";
+    const USAGE: &str = "usage: cargo xtask realistic <axis|tracker|tracker-tools|rtest|rtest-head|rtest-ac|points|points-targets|rotary|c-stage> <seed> <dir> [--hidden EFFECT SIZE] [--cycles N] [--targets N] [--wavy] [--noise-scale F] [--noise-seed S]";
     let (positional, options) = args.split_at(args.len().min(3));
     let [kind, seed, dir] = positional else {
         return Err(USAGE.into());
@@ -60,7 +62,7 @@ fn run_realistic(args: &[String]) -> Result<(), String> {
         v.parse().map_err(|e| format!("{flag} `{v}`: {e}"))
     };
     let (mut hidden, mut cycles, mut targets, mut wavy) = (Vec::new(), None, None, false);
-    let mut noise_scale: Option<f64> = None;
+    let (mut noise_scale, mut noise_seed): (Option<f64>, Option<u64>) = (None, None);
     let mut rest = options.iter();
     while let Some(flag) = rest.next() {
         match flag.as_str() {
@@ -88,6 +90,14 @@ fn run_realistic(args: &[String]) -> Result<(), String> {
                     Ok(s) if s.is_finite() && s >= 0.0 => Some(s),
                     _ => return Err(format!("--noise-scale `{v}`: expected a number ≥ 0")),
                 };
+            }
+            "--noise-seed" => {
+                let v = rest
+                    .next()
+                    .ok_or_else(|| format!("--noise-seed: expected a number\n{USAGE}"))?;
+                noise_seed = Some(v.parse().map_err(|e| {
+                    format!("--noise-seed `{v}`: {e} (expected a whole number ≥ 0)")
+                })?);
             }
             other => return Err(format!("option `{other}`: unknown\n{USAGE}")),
         }
@@ -123,6 +133,7 @@ fn run_realistic(args: &[String]) -> Result<(), String> {
     if let Some(s) = noise_scale {
         spec.noise_scale = s;
     }
+    spec.noise_seed = noise_seed;
     spec.cycles = cycles;
     spec.targets = targets;
     if wavy {

@@ -289,6 +289,9 @@ pub(crate) fn write(spec: &Spec, rng: &mut ChaCha8Rng, dir: &Path) -> std::io::R
         pause,
     };
     let time_decimals = if spec.log.is_some() { 2 } else { 1 };
+    // The noise's stream, from here on ([`Spec::noise_seed`]).
+    let mut own = spec.noise_rng();
+    let rng = own.as_mut().unwrap_or(rng);
     let n_obs = programme.write(
         dir,
         ("x_mm", "deviation_um"),

@@ -357,6 +357,12 @@ pub struct Spec {
     pub waviness: smooth::Waviness,
     /// Multiplies the noise σ (1 = realistic, 0 = noise-free readings).
     pub noise_scale: f64,
+    /// The readings' noise from its own stream of this seed instead of the dataset's: the same
+    /// machine with another draw of the noise, which tells an estimate's bias (the same in
+    /// every draw) from its scatter. What a generator draws after the noise comes from the
+    /// noise's stream too (an R-test's pauses between cycles, a points dataset's second
+    /// set-up).
+    pub noise_seed: Option<u64>,
     /// R-test: number of measurement cycles (re-centred each cycle); `None` draws 1–3.
     pub cycles: Option<usize>,
     /// Axis: a continuous interferometer log instead of stop-and-go targets — `(runs, readings
@@ -368,6 +374,11 @@ pub struct Spec {
 }
 
 impl Spec {
+    /// The noise's own stream where [`Spec::noise_seed`] asks for one.
+    pub(crate) fn noise_rng(&self) -> Option<ChaCha8Rng> {
+        self.noise_seed.map(ChaCha8Rng::seed_from_u64)
+    }
+
     /// A realistic dataset of `kind` with `hidden` effects and the default base model.
     pub fn new(kind: Kind, hidden: &[Hidden]) -> Self {
         Self {
@@ -378,6 +389,7 @@ impl Spec {
             ordinary_scale: 1.0,
             waviness: smooth::Waviness::Gentle,
             noise_scale: 1.0,
+            noise_seed: None,
             cycles: None,
             log: None,
             targets: None,

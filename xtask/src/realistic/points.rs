@@ -417,6 +417,9 @@ pub(crate) fn write(
         .iter()
         .map(|o| (*o, target_mm + holder.transform_vector(o)))
         .collect();
+    // The noise's stream, from here on ([`Spec::noise_seed`]).
+    let mut own = spec.noise_rng();
+    let rng = own.as_mut().unwrap_or(rng);
     let noise = Normal::new(0.0, (noise_um * 1e-3).max(1e-300)).expect("finite σ");
     // Angles rounded as printed: the readings are computed at the angle the file states.
     let (csv, rows) = programme(

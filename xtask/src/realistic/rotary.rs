@@ -90,6 +90,9 @@ pub(crate) fn write(spec: &Spec, rng: &mut ChaCha8Rng, dir: &Path) -> std::io::R
         dt,
         pause,
     };
+    // The noise's stream, from here on ([`Spec::noise_seed`]).
+    let mut own = spec.noise_rng();
+    let rng = own.as_mut().unwrap_or(rng);
     let n_obs = programme.write(
         dir,
         ("c_deg", "deviation_arcsec"),

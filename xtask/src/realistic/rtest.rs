@@ -630,6 +630,9 @@ pub(crate) fn write(spec: &Spec, rng: &mut ChaCha8Rng, dir: &Path) -> std::io::R
             },
         ));
     }
+    // The noise's stream, from here on ([`Spec::noise_seed`]).
+    let mut own = spec.noise_rng();
+    let rng = own.as_mut().unwrap_or(rng);
     let noise = Normal::new(0.0, sigma.max(1e-300)).expect("finite σ");
     let tilt = m.tilt_axis();
     let mut csv = format!(

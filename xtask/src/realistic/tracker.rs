@@ -411,6 +411,9 @@ pub(crate) fn write(spec: &Spec, rng: &mut ChaCha8Rng, dir: &Path) -> std::io::R
         })
         .collect();
 
+    // The noise's stream, from here on ([`Spec::noise_seed`]).
+    let mut own = spec.noise_rng();
+    let rng = own.as_mut().unwrap_or(rng);
     let noise = Normal::new(0.0, (sigma * 1e-3).max(1e-300)).expect("finite σ");
     let mut targets_csv = String::from(if offsets.len() > 1 {
         "id,x_mm,y_mm,z_mm,tool_x_mm,tool_y_mm,tool_z_mm\n"
