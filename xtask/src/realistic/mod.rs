@@ -359,9 +359,10 @@ pub struct Spec {
     pub noise_scale: f64,
     /// The readings' noise from its own stream of this seed instead of the dataset's: the same
     /// machine with another draw of the noise, which tells an estimate's bias (the same in
-    /// every draw) from its scatter. What a generator draws after the noise comes from the
-    /// noise's stream too (an R-test's pauses between cycles, a points dataset's second
-    /// set-up).
+    /// every draw) from its scatter. What a generator draws after the noise starts comes from
+    /// the noise's stream too: an R-test's pauses between cycles, a points dataset's set-up
+    /// poses and angles of C, a tracker dataset's stated station guesses — parts of the
+    /// programme, never of the machine.
     pub noise_seed: Option<u64>,
     /// R-test: number of measurement cycles (re-centred each cycle); `None` draws 1–3.
     pub cycles: Option<usize>,
