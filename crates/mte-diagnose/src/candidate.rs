@@ -429,7 +429,7 @@ fn slot_candidates(
                 Some(axis) => t.exposed_by(axis),
                 None => t,
             };
-            if let Some(settling) = &settling {
+            if let Some(settling) = settling {
                 for drift in drift_candidates(&t, slot.reference.as_ref(), settling) {
                     out.push(Box::new(Requires {
                         term: t.name.clone(),
@@ -462,7 +462,7 @@ fn slot_candidates(
                 .exposed_by(axis.clone());
                 // The scale changing in time: the screw or scale expands as the machine
                 // warms, about the axis' zero (or about a fixed bearing elsewhere, below).
-                if let Some(settling) = &settling {
+                if let Some(settling) = settling {
                     let reference = slot.reference.as_ref().map(|r| Reference {
                         column: r
                             .column
@@ -566,7 +566,7 @@ fn slot_candidates(
                         make,
                     )));
                 }
-                if let Some(d) = direction.as_ref().filter(|_| *positioning) {
+                if let Some(d) = direction.filter(|_| *positioning) {
                     let cols = DMat::from_fn(n, 1, |i, _| slot.column[i] * 0.5 * d[i]);
                     out.push(Box::new(
                         term(
