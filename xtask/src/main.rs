@@ -371,10 +371,10 @@ fn run_study(args: &[String]) -> Result<(), String> {
             .into_iter()
             .filter(|c| kinds.contains(&c.0))
         {
-            report.coverage.extend(studies::power_with(
+            report.coverage.push(studies::coverage_with(
                 kind,
                 effect,
-                &[size],
+                size,
                 n,
                 seed,
                 &studies::user_model_lacking(kind, effect),

@@ -22,14 +22,17 @@ use crate::realistic::{
     write_spec,
 };
 
-/// A finding as recorded: name and estimates `(name, value, uncertainty)` in internal units.
+/// An estimate as recorded: `(name, value, standard uncertainty, 95 % interval where the report
+/// states one)`, in internal units.
+pub type Estimate = (String, f64, f64, Option<mte_diagnose::Interval>);
+
+/// A finding as recorded: name and estimates in internal units.
 #[derive(Debug, Clone, PartialEq)]
 pub struct FoundEffect {
     /// Finding name.
     pub name: String,
-    /// Estimates `(name, value, standard uncertainty, 95 % interval where the report states
-    /// one)`.
-    pub estimates: Vec<(String, f64, f64, Option<mte_diagnose::Interval>)>,
+    /// Its estimates.
+    pub estimates: Vec<Estimate>,
     /// The alternatives the diagnosis reports it cannot separate from this finding.
     pub alternatives: Vec<String>,
     /// Its period (mm along a linear axis, rad of a turn), for a periodic finding.
@@ -217,24 +220,42 @@ pub fn spec_rng(seed: u64) -> ChaCha8Rng {
     ChaCha8Rng::seed_from_u64(seed ^ 0x5eed_5eed_5eed_5eed)
 }
 
-/// Runs `n` datasets of the cell `cell` in parallel; `spec_for(index, rng)` builds each spec
-/// from a generator seeded for that dataset. Prints a progress line on stderr.
+/// Runs `n` datasets of the cell `cell` in parallel; `spec_for(rng)` builds each spec from a
+/// generator seeded for that dataset. Prints a progress line on stderr.
 pub fn run_cell(
     cell: &str,
     n: usize,
     base_seed: u64,
     spec_for: impl Fn(&mut ChaCha8Rng) -> Spec + Sync,
 ) -> Vec<Record> {
+    run_cell_drawn(cell, n, base_seed, 0, spec_for)
+}
+
+/// [`run_cell`] with draw `draw` of the noise: draw 0 is each dataset's own, draw k > 0 the
+/// same machines and effects measured again with the noise of a stream of their own
+/// ([`Spec::noise_seed`]).
+pub fn run_cell_drawn(
+    cell: &str,
+    n: usize,
+    base_seed: u64,
+    draw: usize,
+    spec_for: impl Fn(&mut ChaCha8Rng) -> Spec + Sync,
+) -> Vec<Record> {
     let work = work_dir();
     let done = AtomicUsize::new(0);
+    let label = match draw {
+        0 => cell.to_string(),
+        k => format!("{cell}, noise draw {k}"),
+    };
     let records: Vec<Record> = (0..n)
         .into_par_iter()
         .map(|i| {
             let seed = dataset_seed(base_seed, cell, i);
-            let spec = spec_for(&mut spec_rng(seed));
+            let mut spec = spec_for(&mut spec_rng(seed));
+            spec.noise_seed = (draw > 0).then(|| dataset_seed(base_seed, &label, i));
             let r = run_one(&spec, i, seed, &work);
             let k = done.fetch_add(1, Ordering::Relaxed) + 1;
-            eprint!("\r{cell}: {k}/{n}   ");
+            eprint!("\r{label}: {k}/{n}   ");
             r
         })
         .collect();
@@ -763,12 +784,7 @@ pub fn names_effect(effect: &TrueEffect, finding: &str) -> bool {
 /// drift of the parameter would settle to ([`FoundEffect::first_order_final`]); a linear drift's
 /// rate is not compared with a final value (found first-order): no match.
 pub fn estimate_matches(effect: &TrueEffect, finding: &FoundEffect, k: f64) -> bool {
-    let e = finding
-        .estimates
-        .iter()
-        .find(|e| e.0.contains("amplitude"))
-        .or(finding.estimates.first());
-    let Some((name, v, u, interval)) = e else {
+    let Some((name, v, u, interval)) = compared_estimate(finding) else {
         return false;
     };
     let in_interval = |i: &mte_diagnose::Interval| {
@@ -808,19 +824,132 @@ pub fn change_matches(
     k: f64,
 ) -> Option<bool> {
     let truth = effect.drift?.record_change;
+    let stated = stated_change(finding, outcome);
+    Some(stated.is_some_and(|(v, u)| (v - truth).abs() <= k * u))
+}
+
+/// The estimate of a finding that is compared with the truth ([`estimate_matches`]): the one
+/// named `amplitude` if there is one, else the first.
+fn compared_estimate(finding: &FoundEffect) -> Option<&Estimate> {
+    finding
+        .estimates
+        .iter()
+        .find(|e| e.0.contains("amplitude"))
+        .or(finding.estimates.first())
+}
+
+/// A drift finding's change over the measured time with its u ([`change_matches`]): its own,
+/// or its parameter's by the group of findings the diagnosis says are one drift of it.
+fn stated_change(finding: &FoundEffect, outcome: &Outcome) -> Option<(f64, f64)> {
     let own = finding
         .estimates
         .iter()
-        .find(|e| e.0.ends_with("change over the measured time"));
-    let stated = own.and_then(|own| {
-        outcome
-            .compound_sizes
-            .iter()
-            .find(|(members, name, _, _)| members.contains(&finding.name) && *name == own.0)
-            .map(|(_, _, v, u)| (*v, *u))
-            .or(Some((own.1, own.2)))
-    });
-    Some(stated.is_some_and(|(v, u)| (v - truth).abs() <= k * u))
+        .find(|e| e.0.ends_with("change over the measured time"))?;
+    outcome
+        .compound_sizes
+        .iter()
+        .find(|(members, name, _, _)| members.contains(&finding.name) && *name == own.0)
+        .map(|(_, _, v, u)| (*v, *u))
+        .or(Some((own.1, own.2)))
+}
+
+/// The estimate of a dataset's hidden effect that is compared with the truth as estimate ± k u,
+/// with the truth: `(estimate, u, truth)` — a drift's change over the measured time (its size
+/// whatever form it is found in, [`change_matches`]), else the naming finding's estimate where
+/// [`estimate_matches`] compares it so (not through a stated interval, not a rate against a
+/// final value), as magnitudes where the truth's sign is not the diagnosis's
+/// ([`TrueEffect::signed`]). `None` where no finding names the effect or its estimate is
+/// compared otherwise.
+pub fn scored(effect: &TrueEffect, outcome: &Outcome) -> Option<(f64, f64, f64)> {
+    let Account::Named(finding) = account(effect, outcome) else {
+        return None;
+    };
+    if let Some(drift) = effect.drift {
+        let (v, u) = stated_change(finding, outcome)?;
+        return Some((v, u, drift.record_change));
+    }
+    let (name, v, u, interval) = compared_estimate(finding)?;
+    if interval.is_some() || name.ends_with(" rate") != effect.unit.ends_with("/min") {
+        return None;
+    }
+    Some(if effect.signed {
+        (*v, *u, effect.value)
+    } else {
+        (v.abs(), *u, effect.value.abs())
+    })
+}
+
+/// A coverage cell ([`coverage_with`]): the power table's row of the datasets with their own
+/// noise, the row of the same machines and effects with a second draw of the noise, and the
+/// two draws of each machine compared. Two draws' estimates differ by the scatter alone, so
+/// their difference over its u checks the stated u whatever the bias of the machine's errors
+/// left in the model; a bias of the machine's own makes the draws' z agree.
+#[derive(Debug, Clone)]
+pub struct CoverageCell {
+    /// The datasets with their own noise.
+    pub own: PowerCell,
+    /// The same machines and effects with a second draw of the noise.
+    pub second: PowerCell,
+    /// Machines whose effect both draws name right with an estimate compared as ± u
+    /// ([`scored`]).
+    pub paired: usize,
+    /// Over those, the RMS of `(e₁ − e₂)/√(u₁² + u₂²)`: 1 when u is the estimate's scatter.
+    pub difference_rms: f64,
+    /// Over both draws of those, the RMS of `z = (e − truth)/u`: 1 for an honest u without bias.
+    pub z_rms: f64,
+    /// The correlation of the two draws' z over those machines: near 0 without a bias of each
+    /// machine's own, towards 1 with one.
+    pub z_correlation: f64,
+}
+
+/// Coverage of the stated uncertainties of `effect` at `size`: `n` machines of `kind`, each
+/// with its own noise and with a second draw of it, against the base `base_model`.
+pub fn coverage_with(
+    kind: Kind,
+    effect: Effect,
+    size: f64,
+    n: usize,
+    base_seed: u64,
+    base_model: &BaseModel,
+) -> CoverageCell {
+    let draws =
+        [0, 1].map(|draw| power_records(kind, effect, size, n, base_seed, base_model, draw));
+    let score = |r: &Record| scored(r.effects.first()?, r.outcome.as_ref().ok()?);
+    let pairs: Vec<[(f64, f64, f64); 2]> = draws[0]
+        .iter()
+        .zip(&draws[1])
+        .filter_map(|(a, b)| Some([score(a)?, score(b)?]))
+        .collect();
+    let z = |(v, u, truth): (f64, f64, f64)| (v - truth) / u;
+    let rms = |x: &[f64]| (x.iter().map(|x| x * x).sum::<f64>() / x.len() as f64).sqrt();
+    let differences: Vec<f64> = pairs
+        .iter()
+        .map(|[a, b]| (a.0 - b.0) / a.1.hypot(b.1))
+        .collect();
+    let zs: Vec<[f64; 2]> = pairs.iter().map(|&[a, b]| [z(a), z(b)]).collect();
+    CoverageCell {
+        own: power_cell(kind, effect, size, &draws[0]),
+        second: power_cell(kind, effect, size, &draws[1]),
+        paired: pairs.len(),
+        difference_rms: rms(&differences),
+        z_rms: rms(&zs.concat()),
+        z_correlation: correlation(&zs),
+    }
+}
+
+/// The correlation of the pairs' two members (NaN for fewer than two pairs or no spread).
+fn correlation(pairs: &[[f64; 2]]) -> f64 {
+    let n = pairs.len() as f64;
+    let mean = |k: usize| pairs.iter().map(|p| p[k]).sum::<f64>() / n;
+    let (m0, m1) = (mean(0), mean(1));
+    let (mut s01, mut s00, mut s11) = (0.0, 0.0, 0.0);
+    for p in pairs {
+        let (a, b) = (p[0] - m0, p[1] - m1);
+        s01 += a * b;
+        s00 += a * a;
+        s11 += b * b;
+    }
+    s01 / (s00 * s11).sqrt()
 }
 
 /// Detection power of one effect at one size.
@@ -927,64 +1056,83 @@ pub fn power_with(
     sizes
         .iter()
         .map(|&size| {
-            let cell = format!("power-{}-{:?}-{size}", kind.name(), effect);
-            let records = run_cell(&cell, n, base_seed, |rng| {
-                let mut s = Spec::new(kind, &[effect.hidden(size, rng)]);
-                s.base_model = base_model.clone();
-                s
-            });
-            let mut c = PowerCell {
-                kind,
-                effect,
-                size,
-                n,
-                errors: 0,
-                any_finding: 0,
-                named_right: 0,
-                named_as_alternative: 0,
-                out_of_reach: 0,
-                below_limit: 0,
-                estimate_within_2u: 0,
-                change_within_2u: None,
-                form_qualified: 0,
-                alone_explained: 0,
-                names: Vec::new(),
-            };
-            let mut all_names = Vec::new();
-            for r in &records {
-                let Ok(o) = &r.outcome else {
-                    c.errors += 1;
-                    continue;
-                };
-                let Some(truth) = r.effects.first() else {
-                    c.errors += 1;
-                    continue;
-                };
-                c.any_finding += usize::from(!o.findings.is_empty());
-                match account(truth, o) {
-                    Account::Named(f) => {
-                        c.named_right += 1;
-                        c.estimate_within_2u += usize::from(estimate_matches(truth, f, 2.0));
-                        if let Some(hit) = change_matches(truth, f, o, 2.0) {
-                            *c.change_within_2u.get_or_insert(0) += usize::from(hit);
-                        }
-                        c.form_qualified += usize::from(o.qualified.contains(&f.name));
-                        c.alone_explained += usize::from(
-                            o.verdict == mte_diagnose::Verdict::Explained
-                                && o.findings.iter().all(|f| names_effect(truth, &f.name)),
-                        );
-                    }
-                    Account::NotSeparable => c.named_as_alternative += 1,
-                    Account::OutOfReach => c.out_of_reach += 1,
-                    Account::BelowLimit => c.below_limit += 1,
-                    Account::Missed => {}
-                }
-                all_names.extend(o.findings.iter().map(|f| f.name.clone()));
-            }
-            c.names = name_counts(all_names.iter().map(String::as_str));
-            c
+            let records = power_records(kind, effect, size, n, base_seed, base_model, 0);
+            power_cell(kind, effect, size, &records)
         })
         .collect()
+}
+
+/// The datasets of a power cell ([`power_with`]), with draw `draw` of the noise
+/// ([`run_cell_drawn`]).
+fn power_records(
+    kind: Kind,
+    effect: Effect,
+    size: f64,
+    n: usize,
+    base_seed: u64,
+    base_model: &BaseModel,
+    draw: usize,
+) -> Vec<Record> {
+    let cell = format!("power-{}-{:?}-{size}", kind.name(), effect);
+    run_cell_drawn(&cell, n, base_seed, draw, |rng| {
+        let mut s = Spec::new(kind, &[effect.hidden(size, rng)]);
+        s.base_model = base_model.clone();
+        s
+    })
+}
+
+/// The power table's row of the datasets `records` of `effect` at `size`.
+fn power_cell(kind: Kind, effect: Effect, size: f64, records: &[Record]) -> PowerCell {
+    let mut c = PowerCell {
+        kind,
+        effect,
+        size,
+        n: records.len(),
+        errors: 0,
+        any_finding: 0,
+        named_right: 0,
+        named_as_alternative: 0,
+        out_of_reach: 0,
+        below_limit: 0,
+        estimate_within_2u: 0,
+        change_within_2u: None,
+        form_qualified: 0,
+        alone_explained: 0,
+        names: Vec::new(),
+    };
+    let mut all_names = Vec::new();
+    for r in records {
+        let Ok(o) = &r.outcome else {
+            c.errors += 1;
+            continue;
+        };
+        let Some(truth) = r.effects.first() else {
+            c.errors += 1;
+            continue;
+        };
+        c.any_finding += usize::from(!o.findings.is_empty());
+        match account(truth, o) {
+            Account::Named(f) => {
+                c.named_right += 1;
+                c.estimate_within_2u += usize::from(estimate_matches(truth, f, 2.0));
+                if let Some(hit) = change_matches(truth, f, o, 2.0) {
+                    *c.change_within_2u.get_or_insert(0) += usize::from(hit);
+                }
+                c.form_qualified += usize::from(o.qualified.contains(&f.name));
+                c.alone_explained += usize::from(
+                    o.verdict == mte_diagnose::Verdict::Explained
+                        && o.findings.iter().all(|f| names_effect(truth, &f.name)),
+                );
+            }
+            Account::NotSeparable => c.named_as_alternative += 1,
+            Account::OutOfReach => c.out_of_reach += 1,
+            Account::BelowLimit => c.below_limit += 1,
+            Account::Missed => {}
+        }
+        all_names.extend(o.findings.iter().map(|f| f.name.clone()));
+    }
+    c.names = name_counts(all_names.iter().map(String::as_str));
+    c
 }
 
 /// How a dataset's report stands to one hidden effect: the power table's columns, each taken
@@ -1466,6 +1614,54 @@ fn power_table(s: &mut String, cells: &[PowerCell]) {
     s.push('\n');
 }
 
+/// The coverage cells' second draws of the noise and the two draws compared
+/// ([`CoverageCell`]).
+fn coverage_draws_table(s: &mut String, cells: &[CoverageCell]) {
+    let _ = writeln!(
+        s,
+        "The same machines and hidden effects measured again, with a second draw of the noise \
+(`xtask realistic … --noise-seed`: the machine, its errors and the effect as before; what a \
+generator draws with the noise, an R-test's pauses between cycles, a points dataset's set-up \
+poses and C angles, drawn anew). Its estimates differ from the first draw's by the scatter alone, whatever the bias \
+the machine's errors leave in the model: *difference ÷ its u* is the RMS of \
+(e₁ − e₂)/√(u₁² + u₂²) over the machines whose effect both draws name right (1 for a u that is \
+the estimate's scatter), *z* that of (e − truth)/u over both draws of them (1 for an honest u \
+without bias), and the *correlation of the draws' z* near 0 when no machine has a bias of its \
+own. The estimate compared is a drift's change over the measured time (the size the data \
+determine whatever the form found), else the one the *within 2 u* column compares as ± 2 u \
+(a first-order drift's final value, compared through its stated interval, has no such z). \
+*within 2 u, both draws*: of all draws where the effect is named right.\n\n\
+| kind | effect | size | machines | second draw: named right | second draw: within 2 u | second draw: drift change within 2 u | both draws: within 2 u | both draws: drift change within 2 u | compared in both draws | difference ÷ its u, RMS | z, RMS | correlation of the draws' z |\n\
+|---|---|---|---|---|---|---|---|---|---|---|---|---|"
+    );
+    for c in cells {
+        let (a, b) = (&c.own, &c.second);
+        let ran = b.n - b.errors;
+        let named = a.named_right + b.named_right;
+        let both_changes = a.change_within_2u.zip(b.change_within_2u);
+        let _ = writeln!(
+            s,
+            "| {} | {} | {} {} | {} | {} | {} | {} | {} | {} | {} | {:.2} | {:.2} | {:.2} |",
+            a.kind.name(),
+            a.effect.name(a.kind),
+            a.size,
+            a.effect.unit(),
+            a.n,
+            pct(b.named_right, ran),
+            pct(b.estimate_within_2u, b.named_right),
+            b.change_within_2u
+                .map_or("–".into(), |k| pct(k, b.named_right)),
+            pct(a.estimate_within_2u + b.estimate_within_2u, named),
+            both_changes.map_or("–".into(), |(x, y)| pct(x + y, named)),
+            c.paired,
+            c.difference_rms,
+            c.z_rms,
+            c.z_correlation,
+        );
+    }
+    s.push('\n');
+}
+
 /// Everything one `cargo xtask study` run produced.
 #[derive(Debug, Clone, Default)]
 pub struct StudyReport {
@@ -1477,8 +1673,8 @@ pub struct StudyReport {
     pub fdr: Vec<FdrSummary>,
     /// Power cells.
     pub power: Vec<PowerCell>,
-    /// Coverage cells (power cells with many datasets at one size).
-    pub coverage: Vec<PowerCell>,
+    /// Coverage cells (power cells with many datasets at one size, each measured twice).
+    pub coverage: Vec<CoverageCell>,
     /// Open-world summaries.
     pub openworld: Vec<OpenWorldSummary>,
     /// Cells of several effects at once.
@@ -1731,7 +1927,11 @@ interval itself as the shortest time constant, the change's coverage in this cel
 misses drifts faster than the cycle, found at that floor with their first minutes left out of \
 the stated change).\n"
         );
-        power_table(&mut s, &r.coverage);
+        power_table(
+            &mut s,
+            &r.coverage.iter().map(|c| c.own.clone()).collect::<Vec<_>>(),
+        );
+        coverage_draws_table(&mut s, &r.coverage);
     }
     if !r.combined.is_empty() {
         let _ = writeln!(
@@ -1847,6 +2047,16 @@ mod tests {
             first_order_final,
             ordinary: false,
         }
+    }
+
+    #[test]
+    fn correlation_of_pairs() {
+        // Means 2.5 and 2.5; products of the deviations 0.75 each; sums of squares 5 and 5.
+        let pairs = [[1.0, 2.0], [2.0, 1.0], [3.0, 4.0], [4.0, 3.0]];
+        approx::assert_relative_eq!(correlation(&pairs), 0.6, epsilon = 1e-12);
+        let line: Vec<[f64; 2]> = (0..5).map(|i| [i as f64, 1.0 - 2.0 * i as f64]).collect();
+        approx::assert_relative_eq!(correlation(&line), -1.0, epsilon = 1e-12);
+        assert!(correlation(&[[1.0, 2.0]]).is_nan());
     }
 
     #[test]

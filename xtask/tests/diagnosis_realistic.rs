@@ -820,3 +820,29 @@ fn the_bundled_tracker_tools_dataset_names_its_squareness() {
         e.text
     );
 }
+
+#[test]
+fn a_second_draw_of_the_noise_measures_the_same_machines_again() {
+    // The coverage study's second draw: the same rotary tables with the same worm gears (the
+    // same truth), read with other noise, so other estimates, which differ by about their
+    // scatter (both u: a few tenths of a µrad against a 5 µrad gear).
+    let spec_for = |rng: &mut rand_chacha::ChaCha8Rng| {
+        xtask::realistic::Spec::new(Kind::Rotary, &[Effect::WormGear.hidden(5.0, rng)])
+    };
+    let [own, second] =
+        [0, 1].map(|draw| studies::run_cell_drawn("test-second-draw", 4, SEED, draw, spec_for));
+    for (a, b) in own.iter().zip(&second) {
+        assert_eq!(a.effects, b.effects);
+        let score = |r: &studies::Record| {
+            studies::scored(&r.effects[0], r.outcome.as_ref().expect("diagnosed"))
+                .expect("named right, compared as ± u")
+        };
+        let ((ea, ua, truth_a), (eb, ub, truth_b)) = (score(a), score(b));
+        assert_eq!(truth_a, truth_b);
+        assert_ne!(ea, eb);
+        assert!(
+            (ea - eb).abs() < 5.0 * ua.hypot(ub),
+            "{ea} ± {ua} and {eb} ± {ub}"
+        );
+    }
+}
