@@ -816,7 +816,9 @@ pub fn estimate_matches(effect: &TrueEffect, finding: &FoundEffect, k: f64) -> b
 /// diagnosis' change over the measured time lies within `k` standard uncertainties of it — the
 /// finding's first (an expansion about a point states its scale's, then its zero's), or that
 /// parameter's change by the group of findings the diagnosis says are one drift of it when
-/// `finding` is in one. `None` for other effects.
+/// `finding` is in one; with `k` = 2, where the report states a 95 % interval of the change (by
+/// the profile over the time constant, which admits the other form of drift), the truth must
+/// lie in it. `None` for other effects.
 pub fn change_matches(
     effect: &TrueEffect,
     finding: &FoundEffect,
@@ -825,7 +827,10 @@ pub fn change_matches(
 ) -> Option<bool> {
     let truth = effect.drift?.record_change;
     let stated = stated_change(finding, outcome);
-    Some(stated.is_some_and(|(v, u)| (v - truth).abs() <= k * u))
+    Some(stated.is_some_and(|(v, u, interval)| match interval {
+        Some(i) if k == 2.0 => i.contains(truth),
+        _ => (v - truth).abs() <= k * u,
+    }))
 }
 
 /// The estimate of a finding that is compared with the truth ([`estimate_matches`]): the one
@@ -838,9 +843,13 @@ fn compared_estimate(finding: &FoundEffect) -> Option<&Estimate> {
         .or(finding.estimates.first())
 }
 
-/// A drift finding's change over the measured time with its u ([`change_matches`]): its own,
-/// or its parameter's by the group of findings the diagnosis says are one drift of it.
-fn stated_change(finding: &FoundEffect, outcome: &Outcome) -> Option<(f64, f64)> {
+/// A drift finding's change over the measured time with its u and the 95 % interval the report
+/// states ([`change_matches`]): its own, or its parameter's by the group of findings the
+/// diagnosis says are one drift of it (without an interval).
+fn stated_change(
+    finding: &FoundEffect,
+    outcome: &Outcome,
+) -> Option<(f64, f64, Option<mte_diagnose::Interval>)> {
     let own = finding
         .estimates
         .iter()
@@ -849,8 +858,8 @@ fn stated_change(finding: &FoundEffect, outcome: &Outcome) -> Option<(f64, f64)>
         .compound_sizes
         .iter()
         .find(|(members, name, _, _)| members.contains(&finding.name) && *name == own.0)
-        .map(|(_, _, v, u)| (*v, *u))
-        .or(Some((own.1, own.2)))
+        .map(|(_, _, v, u)| (*v, *u, None))
+        .or(Some((own.1, own.2, own.3)))
 }
 
 /// The estimate of a dataset's hidden effect that is compared with the truth as estimate ± k u,
@@ -865,7 +874,7 @@ pub fn scored(effect: &TrueEffect, outcome: &Outcome) -> Option<(f64, f64, f64)>
         return None;
     };
     if let Some(drift) = effect.drift {
-        let (v, u) = stated_change(finding, outcome)?;
+        let (v, u, _) = stated_change(finding, outcome)?;
         return Some((v, u, drift.record_change));
     }
     let (name, v, u, interval) = compared_estimate(finding)?;
@@ -1871,10 +1880,13 @@ compared through the report's statement beside it of where a first-order drift o
 would settle (a 95 % interval of the final value by the same profile, one-sided where the drift \
 has not settled within the record), and a linear one found as first-order counts as outside); \
 *drift: change over the measured time within 2 u*: \
-for a drift, of those named right, |stated − true| ≤ 2 u for the drift's change from the first \
-reading to the last — the finding's *change over the measured time*, or, where the report says \
-that drift findings of the parameter are one drift of neither form, their change together: the \
-drift's size whatever form it is found in; *named, form qualified*: of those named right, the \
+for a drift, of those named right, the drift's true change from the first reading to the last \
+within the stated one's 95 % interval — the finding's *change over the measured time*, whose \
+interval the report states by the profile over the time constant, which admits the other form \
+of drift (a linear one's, a first-order course of a time constant near the record's; never \
+narrower than ± 2 u) — or, where the report says that drift findings of the parameter are one \
+drift of neither form, within 2 u of their change together: the drift's size whatever form it \
+is found in; *named, form qualified*: of those named right, the \
 share whose naming finding the report qualifies — one effect with other findings of a form no \
 candidate has (a periodic error that is not a sine, a drift of neither form), a periodic \
 error whose period and shape the positions do not determine, or one repeating fewer than six \

@@ -1062,18 +1062,24 @@ fn conclude(
                 Family::Drift {
                     time_constant_s: Some(tau),
                 } => tau,
-                // A linear drift: where a first-order one of the same parameter would settle.
+                // A linear drift: where a first-order one of the same parameter would settle,
+                // and what its change over the record may be if it is one.
                 Family::Drift {
                     time_constant_s: None,
                 } => {
-                    let fit = first_order_fit(candidates, obs, c, span, profile);
-                    unsettled.extend(fit.as_ref().map(|f| f.note(&c.term.name)));
-                    findings[k].first_order = fit;
+                    let Some((fit, changes)) = first_order_fit(candidates, obs, c, span, profile)
+                    else {
+                        continue;
+                    };
+                    unsettled.push(fit.note(&c.term.name));
+                    let f = &mut findings[k];
+                    f.first_order = Some(fit);
+                    with_change_intervals(f, &c.term, changes);
                     continue;
                 }
                 _ => continue,
             };
-            let Some((tau, coefficients)) = profile(&Drifting {
+            let Some(profiled) = profile(&Drifting {
                 candidate: searcher.chosen_candidate(c),
                 variant: c.variant,
                 component: c.component,
@@ -1082,6 +1088,8 @@ fn conclude(
                 continue;
             };
             let f = &mut findings[k];
+            with_change_intervals(f, &c.term, profiled.changes);
+            let (tau, coefficients) = (profiled.time_constant, profiled.final_values);
             for (e, profile) in f.estimates.iter_mut().zip(coefficients) {
                 // A closed interval never narrower than the linearisation's ± 2 u (which holds
                 // the widenings for repeated poses and the base's orders); an open one is the
@@ -4630,28 +4638,30 @@ fn accumulated(q: Quantity) -> Quantity {
 
 /// For a drift found linear (`c`, over a record of `span` s): where the first-order drift of the
 /// same parameter (its twin in the library, [`drift_twin`]) would settle, by its profile over
-/// time constants from a thirtieth of the record (`profile`, [`settling_intervals`]). `None`
-/// where the library has no such candidate.
+/// time constants from a thirtieth of the record (`profile`, [`settling_intervals`]), and the
+/// 95 % intervals of its parameters' changes over the record, a linear course (the longest
+/// time constants) among those admitted. `None` where the library has no such candidate.
 fn first_order_fit(
     candidates: &[Box<dyn Candidate>],
     obs: &Observations,
     c: &Chosen,
     span: f64,
-    profile: impl Fn(&Drifting<'_>) -> Option<(Interval, Vec<Interval>)>,
-) -> Option<FirstOrderFit> {
+    profile: impl Fn(&Drifting<'_>) -> Option<Profiled>,
+) -> Option<(FirstOrderFit, Vec<Interval>)> {
     let (twin, term) = drift_twin(candidates, obs, c, span)?;
-    let (tau, values) = profile(&Drifting {
+    let profiled = profile(&Drifting {
         candidate: candidates[twin].as_ref(),
         variant: 0,
         component: 0,
         tau: span,
     })?;
-    Some(FirstOrderFit {
+    let fit = FirstOrderFit {
         name: term.name,
-        time_constant_s: tau,
-        final_value: *values.first()?,
+        time_constant_s: profiled.time_constant,
+        final_value: *profiled.final_values.first()?,
         quantity: accumulated(c.term.coefficients.first()?.1),
-    })
+    };
+    Some((fit, profiled.changes))
 }
 
 /// The time from the first reading to the last, s (`None` without a time column).
@@ -4760,6 +4770,32 @@ fn drift_courses(
     exchanged
 }
 
+/// Gives each change over the measured time of the drift finding `f` (of the term `drift`) its
+/// 95 % interval by the profile over the time constant (`changes`, one per drifted parameter,
+/// [`Profiled::changes`]), never narrower than the linearisation's ± 2 u: what the change may
+/// be in either form of drift, with the time constant the data leave open. (A drift found
+/// linear whose course is first-order, of a time constant near the record's, has a change the
+/// straight line misses by more than its u.)
+fn with_change_intervals(f: &mut Finding, drift: &Term, changes: Vec<Interval>) {
+    for (stem, profile) in crate::candidate::drifted_parameters(drift)
+        .into_iter()
+        .zip(changes)
+    {
+        let name = format!("{stem} change over the measured time");
+        let Some(e) = f.estimates.iter_mut().find(|e| e.name == name) else {
+            continue;
+        };
+        let (Some(lower), Some(upper)) = (profile.lower, profile.upper) else {
+            continue;
+        };
+        let interval = Interval {
+            lower: Some(lower.min(e.value - 2.0 * e.uncertainty)),
+            upper: Some(upper.max(e.value + 2.0 * e.uncertainty)),
+        };
+        *e = e.clone().with_interval(interval);
+    }
+}
+
 /// A first-order drift to profile ([`settling_intervals`]): a candidate's variant (and the
 /// component of a recurring cause) re-evaluated at any time constant, from `tau`.
 struct Drifting<'a> {
@@ -4767,6 +4803,18 @@ struct Drifting<'a> {
     variant: usize,
     component: usize,
     tau: f64,
+}
+
+/// What the profile of a first-order drift over its time constant bounds
+/// ([`settling_intervals`]), each a 95 % interval.
+struct Profiled {
+    /// The time constant, s.
+    time_constant: Interval,
+    /// Each coefficient: the value its parameter settles to, beyond the record.
+    final_values: Vec<Interval>,
+    /// Each coefficient's change over the record, `A (1 − e^(−T/τ))`: closed, as the course
+    /// of a drift that need not settle tends to a linear one's.
+    changes: Vec<Interval>,
 }
 
 /// A first-order drift's time constant and coefficients (the values it settles to, beyond the
@@ -4779,8 +4827,9 @@ struct Drifting<'a> {
 /// RSS that time constant costs. The time constant's interval is open at an end of the grid the
 /// profile still admits; a coefficient's only where the longest time constant is admitted (a
 /// drift that need not settle within the record has no final value on that side; towards the
-/// shortest, a drift becomes a step of bounded size). `None` where the candidate cannot
-/// re-evaluate the drift.
+/// shortest, a drift becomes a step of bounded size). The change over the record, the same
+/// interval scaled at each time constant by how far the drift has come, `1 − e^(−T/τ)`, is
+/// always closed. `None` where the candidate cannot re-evaluate the drift.
 fn settling_intervals(
     drift: &Drifting<'_>,
     rest: &Projector,
@@ -4788,7 +4837,7 @@ fn settling_intervals(
     rss_final: f64,
     scale: f64,
     span: f64,
-) -> Option<(Interval, Vec<Interval>)> {
+) -> Option<Profiled> {
     const COARSE: usize = 48;
     const FINE: usize = 64;
     let &Drifting {
@@ -4848,14 +4897,21 @@ fn settling_intervals(
         lower: (first > 0).then(|| crossing(&profile[first], &profile[first - 1])),
         upper: (!open_high).then(|| crossing(&profile[last], &profile[last + 1])),
     };
-    let coefficients = (0..profile[0].2.len())
+    // Coefficient j times `factor(τ)` over the admitted time constants: (least, greatest).
+    let bounds = |j: usize, factor: &dyn Fn(f64) -> f64| {
+        let (mut lower, mut upper) = (f64::INFINITY, f64::NEG_INFINITY);
+        for p in &admitted {
+            let half = ((4.0 * scale - (p.1 - least)) * p.3[j]).max(0.0).sqrt();
+            lower = lower.min((p.2[j] - half) * factor(p.0));
+            upper = upper.max((p.2[j] + half) * factor(p.0));
+        }
+        (lower, upper)
+    };
+    let coefficients = 0..profile[0].2.len();
+    let final_values = coefficients
+        .clone()
         .map(|j| {
-            let (mut lower, mut upper) = (f64::INFINITY, f64::NEG_INFINITY);
-            for p in &admitted {
-                let half = ((4.0 * scale - (p.1 - least)) * p.3[j]).max(0.0).sqrt();
-                lower = lower.min(p.2[j] - half);
-                upper = upper.max(p.2[j] + half);
-            }
+            let (lower, upper) = bounds(j, &|_| 1.0);
             // Open where the admitted range reaches the longest time constant, towards where
             // the coefficient goes as the time constant grows.
             let grows = profile[n - 1].2[j] > profile[n - 2].2[j];
@@ -4865,7 +4921,20 @@ fn settling_intervals(
             }
         })
         .collect();
-    Some((tau_interval, coefficients))
+    let changes = coefficients
+        .map(|j| {
+            let (lower, upper) = bounds(j, &|tau| 1.0 - (-span / tau).exp());
+            Interval {
+                lower: Some(lower),
+                upper: Some(upper),
+            }
+        })
+        .collect();
+    Some(Profiled {
+        time_constant: tau_interval,
+        final_values,
+        changes,
+    })
 }
 
 /// Drifts found in one form (linear or first-order) whose course the data say is another: a
