@@ -1600,11 +1600,8 @@ fn power_table(s: &mut String, cells: &[PowerCell]) {
         let ran = c.n - c.errors;
         let _ = writeln!(
             s,
-            "| {} | {} | {} {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |",
-            c.kind.name(),
-            c.effect.name(c.kind),
-            c.size,
-            c.effect.unit(),
+            "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |",
+            cell_columns(c.kind, c.effect, c.size),
             c.n,
             c.errors,
             pct(c.any_finding, ran),
@@ -1621,6 +1618,17 @@ fn power_table(s: &mut String, cells: &[PowerCell]) {
         );
     }
     s.push('\n');
+}
+
+/// A cell's first three columns: kind, effect, size with its unit.
+fn cell_columns(kind: Kind, effect: Effect, size: f64) -> String {
+    format!(
+        "{} | {} | {} {}",
+        kind.name(),
+        effect.name(kind),
+        size,
+        effect.unit()
+    )
 }
 
 /// The coverage cells' second draws of the noise and the two draws compared
@@ -1650,11 +1658,8 @@ determine whatever the form found), else the one the *within 2 u* column compare
         let both_changes = a.change_within_2u.zip(b.change_within_2u);
         let _ = writeln!(
             s,
-            "| {} | {} | {} {} | {} | {} | {} | {} | {} | {} | {} | {:.2} | {:.2} | {:.2} |",
-            a.kind.name(),
-            a.effect.name(a.kind),
-            a.size,
-            a.effect.unit(),
+            "| {} | {} | {} | {} | {} | {} | {} | {} | {:.2} | {:.2} | {:.2} |",
+            cell_columns(a.kind, a.effect, a.size),
             a.n,
             pct(b.named_right, ran),
             pct(b.estimate_within_2u, b.named_right),
@@ -2012,11 +2017,8 @@ report says that the sampling cannot show the effect's period (as in the power t
             let ran = o.n - o.errors;
             let _ = writeln!(
                 s,
-                "| {} | {} | {} {} | {} | {} | {} | {} | {} | {} | {} | {} |",
-                o.kind.name(),
-                o.effect.name(o.kind),
-                o.size,
-                o.effect.unit(),
+                "| {} | {} | {} | {} | {} | {} | {} | {} | {} |",
+                cell_columns(o.kind, o.effect, o.size),
                 o.n,
                 o.errors,
                 pct(o.nothing, ran),
