@@ -993,8 +993,8 @@ pub struct PowerCell {
     /// Of those named right, datasets whose estimate is within 2 u of the truth.
     pub estimate_within_2u: usize,
     /// For a drift, of those named right, datasets whose stated change over the measured time
-    /// is within 2 u of the truth's ([`change_matches`]); `None` for other effects.
-    pub change_within_2u: Option<usize>,
+    /// holds the truth's in its 95 % interval ([`change_matches`]); `None` for other effects.
+    pub change_in_interval: Option<usize>,
     /// Of those named right, datasets where the report qualifies the form of the finding that
     /// names it (one effect of a form no candidate has, or a shape the data do not determine:
     /// [`Outcome::qualified`]).
@@ -1104,7 +1104,7 @@ fn power_cell(kind: Kind, effect: Effect, size: f64, records: &[Record]) -> Powe
         out_of_reach: 0,
         below_limit: 0,
         estimate_within_2u: 0,
-        change_within_2u: None,
+        change_in_interval: None,
         form_qualified: 0,
         alone_explained: 0,
         names: Vec::new(),
@@ -1125,7 +1125,7 @@ fn power_cell(kind: Kind, effect: Effect, size: f64, records: &[Record]) -> Powe
                 c.named_right += 1;
                 c.estimate_within_2u += usize::from(estimate_matches(truth, f, 2.0));
                 if let Some(hit) = change_matches(truth, f, o, 2.0) {
-                    *c.change_within_2u.get_or_insert(0) += usize::from(hit);
+                    *c.change_in_interval.get_or_insert(0) += usize::from(hit);
                 }
                 c.form_qualified += usize::from(o.qualified.contains(&f.name));
                 c.alone_explained += usize::from(
@@ -1594,7 +1594,7 @@ the ordinary errors found as other findings.\n\n\
 fn power_table(s: &mut String, cells: &[PowerCell]) {
     let _ = writeln!(
         s,
-        "| kind | effect | size | datasets | errors | any finding | named right | else reported as not separable | else period stated out of reach | else stated below detection limit | within 2 u | drift: change over the measured time within 2 u | named, form qualified | named alone, explained | most frequent findings |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"
+        "| kind | effect | size | datasets | errors | any finding | named right | else reported as not separable | else period stated out of reach | else stated below detection limit | within 2 u | drift: change over the measured time in its 95 % interval | named, form qualified | named alone, explained | most frequent findings |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"
     );
     for c in cells {
         let ran = c.n - c.errors;
@@ -1610,7 +1610,7 @@ fn power_table(s: &mut String, cells: &[PowerCell]) {
             pct(c.out_of_reach, ran),
             pct(c.below_limit, ran),
             pct(c.estimate_within_2u, c.named_right),
-            c.change_within_2u
+            c.change_in_interval
                 .map_or("–".into(), |k| pct(k, c.named_right)),
             pct(c.form_qualified, c.named_right),
             pct(c.alone_explained, ran),
@@ -1648,14 +1648,14 @@ own. The estimate compared is a drift's change over the measured time (the size 
 determine whatever the form found), else the one the *within 2 u* column compares as ± 2 u \
 (a first-order drift's final value, compared through its stated interval, has no such z). \
 *within 2 u, both draws*: of all draws where the effect is named right.\n\n\
-| kind | effect | size | machines | second draw: named right | second draw: within 2 u | second draw: drift change within 2 u | both draws: within 2 u | both draws: drift change within 2 u | compared in both draws | difference ÷ its u, RMS | z, RMS | correlation of the draws' z |\n\
+| kind | effect | size | machines | second draw: named right | second draw: within 2 u | second draw: drift change in its interval | both draws: within 2 u | both draws: drift change in its interval | compared in both draws | difference ÷ its u, RMS | z, RMS | correlation of the draws' z |\n\
 |---|---|---|---|---|---|---|---|---|---|---|---|---|"
     );
     for c in cells {
         let (a, b) = (&c.own, &c.second);
         let ran = b.n - b.errors;
         let named = a.named_right + b.named_right;
-        let both_changes = a.change_within_2u.zip(b.change_within_2u);
+        let both_changes = a.change_in_interval.zip(b.change_in_interval);
         let _ = writeln!(
             s,
             "| {} | {} | {} | {} | {} | {} | {} | {} | {:.2} | {:.2} | {:.2} |",
@@ -1663,7 +1663,7 @@ determine whatever the form found), else the one the *within 2 u* column compare
             a.n,
             pct(b.named_right, ran),
             pct(b.estimate_within_2u, b.named_right),
-            b.change_within_2u
+            b.change_in_interval
                 .map_or("–".into(), |k| pct(k, b.named_right)),
             pct(a.estimate_within_2u + b.estimate_within_2u, named),
             both_changes.map_or("–".into(), |(x, y)| pct(x + y, named)),
@@ -1884,7 +1884,7 @@ truth must lie in it; a first-order drift found as a linear one, whose estimate 
 compared through the report's statement beside it of where a first-order drift of the parameter \
 would settle (a 95 % interval of the final value by the same profile, one-sided where the drift \
 has not settled within the record), and a linear one found as first-order counts as outside); \
-*drift: change over the measured time within 2 u*: \
+*drift: change over the measured time in its 95 % interval*: \
 for a drift, of those named right, the drift's true change from the first reading to the last \
 within the stated one's 95 % interval — the finding's *change over the measured time*, whose \
 interval the report states by the profile over the time constant, which admits the other form \

@@ -104,7 +104,7 @@ fn against_the_rtest_default_base_a_clean_machine_is_given_its_ordinary_errors_a
     let c = &studies::power_with(Kind::Rtest, Effect::PivotDrift, &[10.0], 2, SEED, &omit)[0];
     assert_eq!(c.errors, 0);
     assert_eq!(c.named_right, c.n, "{:?}", c.names);
-    assert_eq!(c.change_within_2u, Some(c.named_right), "{c:?}");
+    assert_eq!(c.change_in_interval, Some(c.named_right), "{c:?}");
 }
 
 #[test]
@@ -158,9 +158,9 @@ fn hidden_axis_effects_are_named_and_sized() {
     assert_eq!(c.errors, 0);
     assert_eq!(c.alone_explained, c.n, "{:?}", c.names);
     assert!(
-        c.change_within_2u.is_some_and(|k| k + 1 >= c.named_right),
+        c.change_in_interval.is_some_and(|k| k + 1 >= c.named_right),
         "change within 2 u in {:?} of {}",
-        c.change_within_2u,
+        c.change_in_interval,
         c.named_right
     );
 }
@@ -231,7 +231,7 @@ fn a_spindle_growing_in_z_is_named_alone_and_beside_a_pivot_drift() {
     // on every machine type; with the B line drifting too, each is named (or, on the trunnion,
     // said not to be separable from what it is confounded with) and nothing else.
     named_alone_on_every_machine_type(Effect::SpindleDrift, 10.0, |c| {
-        c.change_within_2u == Some(c.named_right)
+        c.change_in_interval == Some(c.named_right)
     });
     named_or_inseparable_and_nothing_else(&combined_cell(Kind::Rtest, Effect::SpindleDrift, 4));
 }
