@@ -1965,8 +1965,8 @@ an R-test the lines of B and C drifting together in X are the tool drifting the 
 the report says which drifts together give the same readings; *else period stated out of reach*: of the effects neither named nor an alternative, those whose \
 period the report says the sampling cannot show (a tracker grid of 5–7 positions along the \
 axis, as in the power table); *within 2 u*: of the effects \
-named, |estimate − truth| ≤ 2 u (a drift's change over the measured time, else as in the power \
-table); *no other finding*: datasets whose every finding names one of the effects; *all named \
+named, |estimate − truth| ≤ 2 u (a drift's change over the measured time in its stated 95 % \
+interval, else as in the power table); *no other finding*: datasets whose every finding names one of the effects; *all named \
 alone, explained*: every effect named, no other finding, and the verdict that the causes found \
 explain the data.\n\n\
 | kind | effects | datasets | errors | every effect named | effects named | else reported as not separable | else period stated out of reach | within 2 u | no other finding | all named alone, explained | most frequent findings |\n|---|---|---|---|---|---|---|---|---|---|---|---|"
