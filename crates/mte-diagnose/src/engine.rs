@@ -1091,17 +1091,7 @@ fn conclude(
             with_change_intervals(f, &c.term, profiled.changes);
             let (tau, coefficients) = (profiled.time_constant, profiled.final_values);
             for (e, profile) in f.estimates.iter_mut().zip(coefficients) {
-                // A closed interval never narrower than the linearisation's ± 2 u (which holds
-                // the widenings for repeated poses and the base's orders); an open one is the
-                // profile's (the linearisation says nothing of a drift that need not settle).
-                let interval = match (profile.lower, profile.upper) {
-                    (Some(l), Some(u)) => Interval {
-                        lower: Some(l.min(e.value - 2.0 * e.uncertainty)),
-                        upper: Some(u.max(e.value + 2.0 * e.uncertainty)),
-                    },
-                    _ => profile,
-                };
-                *e = e.clone().with_interval(interval);
+                *e = with_profile_interval(e, profile);
             }
             if let Some(h) = f.hyper_parameter.take() {
                 f.hyper_parameter = Some(h.with_interval(tau));
@@ -4772,28 +4762,35 @@ fn drift_courses(
 
 /// Gives each change over the measured time of the drift finding `f` (of the term `drift`) its
 /// 95 % interval by the profile over the time constant (`changes`, one per drifted parameter,
-/// [`Profiled::changes`]), never narrower than the linearisation's ± 2 u: what the change may
-/// be in either form of drift, with the time constant the data leave open. (A drift found
-/// linear whose course is first-order, of a time constant near the record's, has a change the
-/// straight line misses by more than its u.)
+/// [`Profiled::changes`]; [`with_profile_interval`]): what the change may be in either form of
+/// drift, with the time constant the data leave open. (A drift found linear whose course is
+/// first-order, of a time constant near the record's, has a change the straight line misses by
+/// more than its u.)
 fn with_change_intervals(f: &mut Finding, drift: &Term, changes: Vec<Interval>) {
     for (stem, profile) in crate::candidate::drifted_parameters(drift)
         .into_iter()
         .zip(changes)
     {
         let name = format!("{stem} change over the measured time");
-        let Some(e) = f.estimates.iter_mut().find(|e| e.name == name) else {
-            continue;
-        };
-        let (Some(lower), Some(upper)) = (profile.lower, profile.upper) else {
-            continue;
-        };
-        let interval = Interval {
-            lower: Some(lower.min(e.value - 2.0 * e.uncertainty)),
-            upper: Some(upper.max(e.value + 2.0 * e.uncertainty)),
-        };
-        *e = e.clone().with_interval(interval);
+        if let Some(e) = f.estimates.iter_mut().find(|e| e.name == name) {
+            *e = with_profile_interval(e, profile);
+        }
     }
+}
+
+/// The estimate `e` with its 95 % interval by a profile: a closed interval never narrower than
+/// the linearisation's ± 2 u (which holds the widenings for repeated poses and the base's
+/// orders); an open one the profile's (the linearisation says nothing of a drift that need not
+/// settle).
+fn with_profile_interval(e: &Estimate, profile: Interval) -> Estimate {
+    let interval = match (profile.lower, profile.upper) {
+        (Some(l), Some(u)) => Interval {
+            lower: Some(l.min(e.value - 2.0 * e.uncertainty)),
+            upper: Some(u.max(e.value + 2.0 * e.uncertainty)),
+        },
+        _ => profile,
+    };
+    e.clone().with_interval(interval)
 }
 
 /// A first-order drift to profile ([`settling_intervals`]): a candidate's variant (and the
