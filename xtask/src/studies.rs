@@ -890,9 +890,8 @@ pub fn scored(effect: &TrueEffect, outcome: &Outcome) -> Option<(f64, f64, f64)>
 
 /// A coverage cell ([`coverage_with`]): the power table's row of the datasets with their own
 /// noise, the row of the same machines and effects with a second draw of the noise, and the
-/// two draws of each machine compared. Two draws' estimates differ by the scatter alone, so
-/// their difference over its u checks the stated u whatever the bias of the machine's errors
-/// left in the model; a bias of the machine's own makes the draws' z agree.
+/// two draws of each machine compared: a bias of the machine's own (its errors left in the
+/// model) makes the draws' z agree, a u too small for the scatter makes them large apart.
 #[derive(Debug, Clone)]
 pub struct CoverageCell {
     /// The datasets with their own noise.
@@ -902,8 +901,6 @@ pub struct CoverageCell {
     /// Machines whose effect both draws name right with an estimate compared as ± u
     /// ([`scored`]).
     pub paired: usize,
-    /// Over those, the RMS of `(e₁ − e₂)/√(u₁² + u₂²)`: 1 when u is the estimate's scatter.
-    pub difference_rms: f64,
     /// Over both draws of those, the RMS of `z = (e − truth)/u`: 1 for an honest u without bias.
     pub z_rms: f64,
     /// The correlation of the two draws' z over those machines: near 0 without a bias of each
@@ -931,16 +928,11 @@ pub fn coverage_with(
         .collect();
     let z = |(v, u, truth): (f64, f64, f64)| (v - truth) / u;
     let rms = |x: &[f64]| (x.iter().map(|x| x * x).sum::<f64>() / x.len() as f64).sqrt();
-    let differences: Vec<f64> = pairs
-        .iter()
-        .map(|[a, b]| (a.0 - b.0) / a.1.hypot(b.1))
-        .collect();
     let zs: Vec<[f64; 2]> = pairs.iter().map(|&[a, b]| [z(a), z(b)]).collect();
     CoverageCell {
         own: power_cell(kind, effect, size, &draws[0]),
         second: power_cell(kind, effect, size, &draws[1]),
         paired: pairs.len(),
-        difference_rms: rms(&differences),
         z_rms: rms(&zs.concat()),
         z_correlation: correlation(&zs),
     }
@@ -1639,17 +1631,17 @@ fn coverage_draws_table(s: &mut String, cells: &[CoverageCell]) {
         "The same machines and hidden effects measured again, with a second draw of the noise \
 (`xtask realistic … --noise-seed`: the machine, its errors and the effect as before; what a \
 generator draws with the noise, an R-test's pauses between cycles, a points dataset's set-up \
-poses and C angles, drawn anew). Its estimates differ from the first draw's by the scatter alone, whatever the bias \
-the machine's errors leave in the model: *difference ÷ its u* is the RMS of \
-(e₁ − e₂)/√(u₁² + u₂²) over the machines whose effect both draws name right (1 for a u that is \
-the estimate's scatter), *z* that of (e − truth)/u over both draws of them (1 for an honest u \
-without bias), and the *correlation of the draws' z* near 0 when no machine has a bias of its \
-own. The estimate compared is a drift's change over the measured time (the size the data \
+poses and C angles, drawn anew). Over the machines whose effect both draws name right: \
+*z, RMS* over both draws of z = (e − truth)/u, each draw against its own truth (an R-test's \
+record, and with it a drift's change, lasts as its pauses do), 1 for an honest u without bias; \
+the *correlation of the draws' z* near 0 where no machine has a bias of its own, towards 1 \
+where the machine's errors left in the model bias its estimate (a u right for the scatter then \
+still misses the truth). The estimate compared is a drift's change over the measured time (the size the data \
 determine whatever the form found), else the one the *within 2 u* column compares as ± 2 u \
 (a first-order drift's final value, compared through its stated interval, has no such z). \
 *within 2 u, both draws*: of all draws where the effect is named right.\n\n\
-| kind | effect | size | machines | second draw: named right | second draw: within 2 u | second draw: drift change in its interval | both draws: within 2 u | both draws: drift change in its interval | compared in both draws | difference ÷ its u, RMS | z, RMS | correlation of the draws' z |\n\
-|---|---|---|---|---|---|---|---|---|---|---|---|---|"
+| kind | effect | size | machines | second draw: named right | second draw: within 2 u | second draw: drift change in its interval | both draws: within 2 u | both draws: drift change in its interval | compared in both draws | z, RMS | correlation of the draws' z |\n\
+|---|---|---|---|---|---|---|---|---|---|---|---|"
     );
     for c in cells {
         let (a, b) = (&c.own, &c.second);
@@ -1658,7 +1650,7 @@ determine whatever the form found), else the one the *within 2 u* column compare
         let both_changes = a.change_in_interval.zip(b.change_in_interval);
         let _ = writeln!(
             s,
-            "| {} | {} | {} | {} | {} | {} | {} | {} | {:.2} | {:.2} | {:.2} |",
+            "| {} | {} | {} | {} | {} | {} | {} | {} | {:.2} | {:.2} |",
             cell_columns(a.kind, a.effect, a.size),
             a.n,
             pct(b.named_right, ran),
@@ -1668,7 +1660,6 @@ determine whatever the form found), else the one the *within 2 u* column compare
             pct(a.estimate_within_2u + b.estimate_within_2u, named),
             both_changes.map_or("–".into(), |(x, y)| pct(x + y, named)),
             c.paired,
-            c.difference_rms,
             c.z_rms,
             c.z_correlation,
         );
