@@ -890,8 +890,8 @@ pub fn scored(effect: &TrueEffect, outcome: &Outcome) -> Option<(f64, f64, f64)>
 
 /// A coverage cell ([`coverage_with`]): the power table's row of the datasets with their own
 /// noise, the row of the same machines and effects with a second draw of the noise, and the
-/// two draws of each machine compared: a bias of the machine's own (its errors left in the
-/// model) makes the draws' z agree, a u too small for the scatter makes them large apart.
+/// two draws of each machine compared: a u too small for the scatter makes both draws' z large,
+/// a bias of the machine's own (its errors left in the model) makes them agree.
 #[derive(Debug, Clone)]
 pub struct CoverageCell {
     /// The datasets with their own noise.
