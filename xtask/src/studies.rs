@@ -1583,7 +1583,7 @@ the ordinary errors found as other findings.\n\n\
     }
 }
 
-fn power_table(s: &mut String, cells: &[PowerCell]) {
+fn power_table<'a>(s: &mut String, cells: impl IntoIterator<Item = &'a PowerCell>) {
     let _ = writeln!(
         s,
         "| kind | effect | size | datasets | errors | any finding | named right | else reported as not separable | else period stated out of reach | else stated below detection limit | within 2 u | drift: change over the measured time in its 95 % interval | named, form qualified | named alone, explained | most frequent findings |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"
@@ -1935,10 +1935,7 @@ interval itself as the shortest time constant, the change's coverage in this cel
 misses drifts faster than the cycle, found at that floor with their first minutes left out of \
 the stated change).\n"
         );
-        power_table(
-            &mut s,
-            &r.coverage.iter().map(|c| c.own.clone()).collect::<Vec<_>>(),
-        );
+        power_table(&mut s, r.coverage.iter().map(|c| &c.own));
         coverage_draws_table(&mut s, &r.coverage);
     }
     if !r.combined.is_empty() {
