@@ -45,8 +45,9 @@ const USAGE: &str = "usage: cargo xtask <reproduce [seed000|seed002|seed003|seed
 /// 8 cycles, 400 targets); `--wavy`: the false-discovery study's wavier ordinary errors;
 /// `--noise-scale`: the noise σ times this (0.01: nearly noise-free readings, to tell an
 /// estimate's bias from its scatter); `--noise-seed S`: the same machine with another draw of
-/// the noise, from its own stream of seed `S` (two draws' estimates differ by the scatter
-/// alone: their difference against their u tells a wrong u from a bias).
+/// the noise, from its own stream of seed `S` (a bias from the machine's errors repeats in
+/// every draw, the scatter does not; what a generator draws with the noise, an R-test's
+/// pauses or a points dataset's set-ups, and with it the truth, may differ).
 /// `c-stage` writes the 3-D points of a C table with a calibrated
 /// target, the C line's location errors and a scale error of X (the bundled
 /// `fixtures/datasets/c-stage-points/` is seed 1); `points` the studies' realistic ones, every
