@@ -778,7 +778,8 @@ pub fn names_effect(effect: &TrueEffect, finding: &str) -> bool {
 /// Whether the finding's estimate matches the truth within `k` standard uncertainties: the
 /// estimate named `amplitude` if there is one, else the first; magnitudes are compared where the
 /// truth's sign is not defined the diagnosis's way ([`TrueEffect::signed`]). Where the report
-/// states a 95 % interval (a first-order drift's final value, beyond the record), with `k` = 2
+/// states a 95 % interval (a first-order drift's final value, beyond the record; a periodic
+/// error's amplitude whose period the data leave open within its main lobe), with `k` = 2
 /// the truth must lie in it. A first-order drift found linear, whose estimate is a rate, is
 /// compared with `k` = 2 through the interval the report states for the value a first-order
 /// drift of the parameter would settle to ([`FoundEffect::first_order_final`]); a linear drift's
@@ -1871,8 +1872,9 @@ for B tilt and squareness the truth is the machine's total, ordinary + hidden, f
 positioning the amplitude of the machine's total at the hidden harmonic, where its ordinary \
 error motion about Z has a component too; for a first-order drift's final value, beyond the \
 record, the report states a 95 % interval by profile likelihood over the time constant, and the \
-truth must lie in it; a first-order drift found as a linear one, whose estimate is a rate, is \
-compared through the report's statement beside it of where a first-order drift of the parameter \
+truth must lie in it, as for a periodic error's amplitude where the report states one by the \
+profile over the period (flat near the period found: at few irregular targets); a first-order \
+drift found as a linear one, whose estimate is a rate, is compared through the report's statement beside it of where a first-order drift of the parameter \
 would settle (a 95 % interval of the final value by the same profile, one-sided where the drift \
 has not settled within the record), and a linear one found as first-order counts as outside); \
 *drift: change over the measured time in its 95 % interval*: \

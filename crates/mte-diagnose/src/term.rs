@@ -83,8 +83,14 @@ impl Quantity {
 
     /// A value without uncertainty in the reported unit, to three significant digits.
     pub fn format_value(self, value: f64) -> String {
+        self.format_to(value, value.abs() / 10.0)
+    }
+
+    /// The value in the reported unit, to the decimals that show `resolution` (same unit as
+    /// the value) with two significant digits.
+    fn format_to(self, value: f64, resolution: f64) -> String {
         let (f, unit) = self.report_unit();
-        let digits = significant_decimals((value * f).abs() / 10.0);
+        let digits = significant_decimals(resolution * f);
         format!("{:.*} {unit}", digits, value * f)
     }
 
@@ -242,8 +248,16 @@ impl Interval {
     /// "a or above", "b or below", "any value".
     pub fn describe(&self, q: Quantity) -> String {
         match (self.lower, self.upper) {
+            // To the decimals that show a quarter of its width (about a u) to two digits, at
+            // least those of its values' own size: an interval narrow beside its values (a
+            // period's) keeps the digits that tell its ends apart.
             (Some(a), Some(b)) => {
-                format!("between {} and {}", q.format_value(a), q.format_value(b))
+                let resolution = ((b - a) / 4.0).min(a.abs().max(b.abs()) / 10.0);
+                format!(
+                    "between {} and {}",
+                    q.format_to(a, resolution),
+                    q.format_to(b, resolution)
+                )
             }
             (Some(a), None) => format!("{} or above", q.format_value(a)),
             (None, Some(b)) => format!("{} or below", q.format_value(b)),
