@@ -887,9 +887,10 @@ fn a_drift_found_linear_states_a_change_that_holds_the_curve_it_may_have() {
     assert!(interval.contains(truth), "{} against {truth}", change.text);
 }
 
-/// The hidden pitch, its true period (mm) and the diagnosis of dataset `index` of the axis'
-/// 2 µm pitch power cell (base seed 1), against the user's model without it.
-fn pitch_dataset(index: usize) -> (f64, mte_diagnose::Diagnosis) {
+/// The hidden pitch's true period (mm) and the found pitch's period and amplitude, of dataset
+/// `index` of the axis' 2 µm pitch power cell (base seed 1), against the user's model without
+/// it.
+fn pitch_dataset(index: usize) -> (f64, mte_diagnose::Estimate, mte_diagnose::Estimate) {
     use xtask::realistic::{Hidden, Spec};
     let seed = studies::dataset_seed(1, "power-axis-Pitch-2", index);
     let mut spec = Spec::new(
@@ -900,7 +901,15 @@ fn pitch_dataset(index: usize) -> (f64, mte_diagnose::Diagnosis) {
     let &[Hidden::Pitch { period_mm, .. }] = &spec.hidden[..] else {
         panic!("a pitch: {:?}", spec.hidden);
     };
-    (period_mm, diagnosed(&spec, seed))
+    let d = diagnosed(&spec, seed);
+    let f = d
+        .findings
+        .iter()
+        .find(|f| f.name == "EXX periodic")
+        .expect("the pitch is found");
+    let period = f.hyper_parameter.clone().expect("a period");
+    let amplitude = f.estimates.iter().find(|e| e.name == "amplitude").unwrap();
+    (period_mm, period, amplitude.clone())
 }
 
 #[test]
@@ -909,14 +918,7 @@ fn a_pitch_whose_true_period_is_not_among_the_best_grid_peaks_is_found_at_it() {
     // degree 9. Dozens of aliases come within 0.7 of the best on the period grid; with only
     // the first four refined, an alias of 1.47 mm was found with a third of the amplitude
     // (0.70 ± 0.24 µm). Every peak refined, the pitch itself is found.
-    let (period_mm, d) = pitch_dataset(1);
-    let f = d
-        .findings
-        .iter()
-        .find(|f| f.name == "EXX periodic")
-        .expect("the pitch is found");
-    let period = f.hyper_parameter.as_ref().expect("a period");
-    let amplitude = f.estimates.iter().find(|e| e.name == "amplitude").unwrap();
+    let (period_mm, period, amplitude) = pitch_dataset(1);
     assert!(
         (period.value - period_mm).abs() <= 2.0 * period.uncertainty,
         "period {} against {period_mm} mm",
@@ -935,14 +937,7 @@ fn a_pitch_whose_period_the_targets_leave_open_states_intervals_that_hold_it() {
     // profile over the period is flat from 17.40 to 17.60 mm (two shallow minima), and the
     // period found, 17.587 ± 0.034 mm, with an amplitude of 1.563 ± 0.071 µm, misses the truth
     // by 6 u. The 95 % intervals by the profile over the period hold both.
-    let (period_mm, d) = pitch_dataset(156);
-    let f = d
-        .findings
-        .iter()
-        .find(|f| f.name == "EXX periodic")
-        .expect("the pitch is found");
-    let period = f.hyper_parameter.as_ref().expect("a period");
-    let amplitude = f.estimates.iter().find(|e| e.name == "amplitude").unwrap();
+    let (period_mm, period, amplitude) = pitch_dataset(156);
     // The case the dataset is kept for: the linearisation misses.
     assert!(
         (amplitude.value - 2e-3).abs() > 2.0 * amplitude.uncertainty,

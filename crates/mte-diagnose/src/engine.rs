@@ -4864,13 +4864,16 @@ impl Tunable<'_> {
     }
 }
 
+/// A coordinate of a hyper-parameter (log τ, a period's frequency) and back.
+type Coordinate = (fn(f64) -> f64, fn(f64) -> f64);
+
 /// Where a profile crosses `limit` between an admitted point and its neighbour outside, in the
 /// coordinate `coordinate` of the hyper-parameter (the profile taken as linear in it).
 fn profile_crossing(
     inner: &ProfilePoint,
     outer: &ProfilePoint,
     limit: f64,
-    coordinate: (fn(f64) -> f64, fn(f64) -> f64),
+    coordinate: Coordinate,
 ) -> f64 {
     let (to, from) = coordinate;
     let f = ((limit - inner.rss) / (outer.rss - inner.rss)).clamp(0.0, 1.0);
@@ -4948,7 +4951,7 @@ fn settling_intervals(
     // An end of the time constant's interval: where the profile crosses 4 between the admitted
     // point and its neighbour outside (linear in RSS against log τ).
     let limit = least + 4.0 * scale;
-    let log = (f64::ln as fn(f64) -> f64, f64::exp as fn(f64) -> f64);
+    let log: Coordinate = (f64::ln, f64::exp);
     let tau_interval = Interval {
         lower: (first > 0)
             .then(|| profile_crossing(&profile[first], &profile[first - 1], limit, log)),
@@ -5045,7 +5048,7 @@ fn period_intervals(
     let last = profile.iter().rposition(inside)?;
     // Linear in frequency; an admitted end of the grid bounds the interval there (farther off
     // are other modes).
-    let frequency = (f64::recip as fn(f64) -> f64, f64::recip as fn(f64) -> f64);
+    let frequency: Coordinate = (f64::recip, f64::recip);
     let end = |i: usize, outside: Option<usize>| match outside {
         Some(o) => profile_crossing(&profile[i], &profile[o], limit, frequency),
         None => profile[i].at,
