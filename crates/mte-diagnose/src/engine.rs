@@ -5059,16 +5059,9 @@ fn period_intervals(
     };
     let (mut lower, mut upper) = (f64::INFINITY, f64::NEG_INFINITY);
     for p in profile.iter().filter(|p| inside(p)) {
-        let amplitude = p.coef[0].hypot(p.coef[1]);
-        // Delta method: ∂amplitude/∂(a, b) = (a, b)/amplitude.
-        let g = if amplitude > 0.0 {
-            &p.coef / amplitude
-        } else {
-            DVec::from_element(2, std::f64::consts::FRAC_1_SQRT_2)
-        };
-        let half = ((limit - p.rss) * g.dot(&(&p.cofactor * &g)))
-            .max(0.0)
-            .sqrt();
+        let (amplitude, cofactor) =
+            crate::term::amplitude_and_variance(p.coef[0], p.coef[1], &p.cofactor);
+        let half = ((limit - p.rss) * cofactor).max(0.0).sqrt();
         lower = lower.min(amplitude - half);
         upper = upper.max(amplitude + half);
     }

@@ -118,6 +118,21 @@ pub(crate) fn significant_decimals(u: f64) -> usize {
     (1.0 - u.log10().floor()).clamp(0.0, 6.0) as usize
 }
 
+/// The amplitude √(a² + b²) of a·sin + b·cos and its variance by the delta method
+/// (∂amplitude/∂(a, b) = (a, b)/amplitude) from the covariance (or a cofactor) `cov` of a and b
+/// (its first two rows and columns).
+pub(crate) fn amplitude_and_variance(a: f64, b: f64, cov: &DMat) -> (f64, f64) {
+    let amp = a.hypot(b);
+    let g = if amp > 0.0 {
+        [a / amp, b / amp]
+    } else {
+        [std::f64::consts::FRAC_1_SQRT_2; 2]
+    };
+    let var =
+        g[0] * g[0] * cov[(0, 0)] + 2.0 * g[0] * g[1] * cov[(0, 1)] + g[1] * g[1] * cov[(1, 1)];
+    (amp, var)
+}
+
 /// How the coefficients of a term are summarised for the report.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 #[non_exhaustive]
@@ -336,17 +351,7 @@ impl Term {
                 out
             }
             Summary::Amplitude if coef.len() == 2 => {
-                let (a, b) = (coef[0], coef[1]);
-                let amp = a.hypot(b);
-                // Delta method: ∂amp/∂(a, b) = (a, b)/amp.
-                let g = if amp > 0.0 {
-                    [a / amp, b / amp]
-                } else {
-                    [std::f64::consts::FRAC_1_SQRT_2; 2]
-                };
-                let var = g[0] * g[0] * cov[(0, 0)]
-                    + 2.0 * g[0] * g[1] * cov[(0, 1)]
-                    + g[1] * g[1] * cov[(1, 1)];
+                let (amp, var) = amplitude_and_variance(coef[0], coef[1], cov);
                 vec![Estimate::new(
                     "amplitude",
                     amp,
