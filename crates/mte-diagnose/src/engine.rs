@@ -1729,39 +1729,57 @@ impl Pool {
     /// of rows `groups` (none: one product, of all rows): from the columns, or through the
     /// distinct values of an entry's spread (`Sᵀ diag(w2) x`, formed once for all its variants).
     fn products_of(&self, x: &DMat, w2: &DVec, groups: &[Vec<usize>]) -> Vec<DMat> {
-        let dense = self.dense_columns();
-        let dense = if groups.is_empty() {
-            vec![weighted_products(x, w2, &dense)]
-        } else {
-            weighted_products_by_rows(x, w2, groups, &dense)
-        };
         let rows: Vec<Option<&[usize]>> = if groups.is_empty() {
             vec![None]
         } else {
             groups.iter().map(|g| Some(&g[..])).collect()
         };
+        let with_spread: Vec<usize> = (0..self.spreads.len())
+            .filter(|&ci| self.spreads[ci].is_some())
+            .collect();
+        // The columns' products, and beside them one job per spread entry and group (a few
+        // entries, of unequal cost), in group-major order.
+        let (dense, spread_parts) = rayon::join(
+            || {
+                let dense = self.dense_columns();
+                if groups.is_empty() {
+                    vec![weighted_products(x, w2, &dense)]
+                } else {
+                    weighted_products_by_rows(x, w2, groups, &dense)
+                }
+            },
+            || {
+                (0..rows.len() * with_spread.len())
+                    .into_par_iter()
+                    .map(|job| {
+                        let (g, ci) = (
+                            job / with_spread.len(),
+                            with_spread[job % with_spread.len()],
+                        );
+                        let (spread, values) =
+                            self.spreads[ci].as_ref().expect("an entry with one");
+                        tr_mul(&spread.weighted_sums(x, w2, rows[g]), values)
+                    })
+                    .collect::<Vec<_>>()
+            },
+        );
         let total = self.variants.iter().flatten().map(Term::width).sum();
-        // (The groups independent: in parallel.)
+        let mut spread_parts = spread_parts.into_iter();
         dense
-            .into_par_iter()
-            .zip(rows)
-            .map(|(dense, rows)| {
+            .into_iter()
+            .map(|dense| {
                 let mut out = DMat::zeros(x.ncols(), total);
                 let mut from = 0;
                 for (ci, spread) in self.spreads.iter().enumerate() {
                     let at = self.offsets[ci][0];
-                    match spread {
-                        None => {
-                            let width: usize = self.variants[ci].iter().map(Term::width).sum();
-                            out.columns_mut(at, width)
-                                .copy_from(&dense.columns(from, width));
-                            from += width;
-                        }
-                        Some((spread, values)) => {
-                            let z = spread.weighted_sums(x, w2, rows);
-                            out.columns_mut(at, values.ncols())
-                                .copy_from(&tr_mul(&z, values));
-                        }
+                    let width: usize = self.variants[ci].iter().map(Term::width).sum();
+                    if spread.is_some() {
+                        let part = spread_parts.next().expect("one per spread entry and group");
+                        out.columns_mut(at, part.ncols()).copy_from(&part);
+                    } else {
+                        out.columns_mut(at, width)
+                            .copy_from(&dense.columns(from, width));
+                        from += width;
                     }
                 }
                 out
@@ -1811,19 +1829,19 @@ impl Pool {
     /// ([`block_grams`]).
     fn variant_grams(&self, group: &[usize], groups: usize) -> Vec<Vec<DMat>> {
         let dense = self.dense_columns();
-        let mut dense = block_grams(&dense, &self.w2, group, groups)
-            .into_iter()
-            .map(Vec::into_iter)
-            .collect::<Vec<_>>();
-        // Each spread entry's `Sᵀ W² S` on each group's rows, then its variants' functions.
-        let spread_grams: Vec<Vec<Vec<DMat>>> = self
-            .spreads
-            .par_iter()
-            .enumerate()
-            .filter_map(|(ci, s)| s.as_ref().map(|(spread, _)| (ci, spread)))
-            .map(|(ci, spread)| {
-                (0..groups)
-                    .map(|g| {
+        // Each spread entry's `Sᵀ W² S` on each group's rows, then its variants' functions:
+        // one job per entry and group (a few entries, of unequal cost), beside the columns'.
+        let with_spread: Vec<usize> = (0..self.spreads.len())
+            .filter(|&ci| self.spreads[ci].is_some())
+            .collect();
+        let (dense, spread_grams) = rayon::join(
+            || block_grams(&dense, &self.w2, group, groups),
+            || {
+                (0..with_spread.len() * groups)
+                    .into_par_iter()
+                    .map(|job| {
+                        let (ci, g) = (with_spread[job / groups], job % groups);
+                        let (spread, _) = self.spreads[ci].as_ref().expect("an entry with one");
                         let w2 = DVec::from_iterator(
                             self.w2.len(),
                             self.w2
@@ -1835,18 +1853,18 @@ impl Pool {
                         (0..self.variants[ci].len())
                             .filter_map(|vi| self.spread_values(ci, vi))
                             .map(|(_, b)| Spread::quadratic(&m, &b))
-                            .collect()
+                            .collect::<Vec<_>>()
                     })
-                    .collect()
-            })
-            .collect();
+                    .collect::<Vec<_>>()
+            },
+        );
+        let mut dense = dense.into_iter().map(Vec::into_iter).collect::<Vec<_>>();
         let mut spread_grams = spread_grams.into_iter();
         let mut out: Vec<Vec<DMat>> = vec![Vec::new(); groups];
         for (v, s) in self.variants.iter().zip(&self.spreads) {
             if s.is_some() {
-                let of_entry = spread_grams.next().expect("one per spread entry");
-                for (out, grams) in out.iter_mut().zip(of_entry) {
-                    out.extend(grams);
+                for out in &mut out {
+                    out.extend(spread_grams.next().expect("one per spread entry and group"));
                 }
             } else {
                 for (out, grams) in out.iter_mut().zip(&mut dense) {
