@@ -13,9 +13,9 @@ use serde::Serialize;
 use crate::candidate::{Candidate, Role, Score, Spread, SpreadVariants};
 use crate::data::{Observations, VariableKind};
 use crate::fit::{
-    Directions, Folds, Increment, Projector, SEPARABILITY_TOLERANCE, Solution, SpreadProducts,
-    block_grams, design, fit_on_rows, max_abs, rms, separable_columns, solve, tr_mul,
-    weighted_products, weighted_products_by_rows, whitened_r, whitening,
+    Directions, FoldBasis, Folds, Increment, Projector, SEPARABILITY_TOLERANCE, Solution,
+    SpreadProducts, block_grams, design, fit_on_rows, max_abs, rms, separable_columns, solve,
+    tr_mul, weighted_products, weighted_products_by_rows, whitened_r, whitening,
 };
 use crate::structure::{StructureTest, structure_tests};
 use crate::term::{Estimate, Family, Interval, Quantity, Summary, Term};
@@ -805,7 +805,9 @@ fn conclude(
     let x0 = design(&base.iter().collect::<Vec<_>>(), n);
     let base_sol = solve(&x0, &obs.values, w);
     let base_fit = Projector::fit(&x0, &obs.values, w);
-    let base_cv = base_fit.fold_fits(&folds, &x0, &obs.values).residuals();
+    let base_cv = base_fit
+        .fold_fits(&folds, &x0, &obs.values, None)
+        .residuals();
     let base_quality = quality(obs, &base_sol, &base_cv);
     let base_parameters = parameters(
         &base,
@@ -858,7 +860,7 @@ fn conclude(
         let terms: Vec<Term> = searcher.with(&chosen, None).into_iter().cloned().collect();
         let (x, fit) = searcher.fit_of(&base_fit, &terms.iter().collect::<Vec<_>>());
         let sol = solve(&x, &obs.values, w);
-        let cv = fit.fold_fits(&folds, &x, &obs.values).residuals();
+        let cv = fit.fold_fits(&folds, &x, &obs.values, None).residuals();
         let extended = quality(obs, &sol, &cv);
         let scale = covariance_scale(obs, extended.sigma0);
         let (mut cov, hyper_rows) =
@@ -2414,6 +2416,9 @@ impl Searcher<'_> {
 
         // The variants' products with the base's directions (see below).
         let mut stable_qc: Option<DMat> = None;
+        // The base's directions on the folds' test rows, shared by the fold fits of every model
+        // of the search (all extend the base's fit).
+        let fold_basis = base_fit.fold_basis(folds);
         let last = loop {
             // (The base alone: its fit itself.)
             let projector = if x.ncols() == base_fit.design_columns() {
@@ -2468,7 +2473,7 @@ impl Searcher<'_> {
                     )
                 }
             };
-            let fold_fits = projector.fold_fits(folds, &x, y);
+            let fold_fits = projector.fold_fits(folds, &x, y, Some(&fold_basis));
             let cv_rms = fold_fits.rms();
             let dof = projector.dof();
             // A cause that builds on a term needs the term in the model: by name, or as a
@@ -2897,7 +2902,7 @@ impl Searcher<'_> {
         } else {
             complete.fit_of(base_fit, &complete.with(&chosen, None))
         };
-        pruned.extend(complete.prune(&mut chosen, folds, base_fit, last));
+        pruned.extend(complete.prune(&mut chosen, (folds, &fold_basis), base_fit, last));
         SearchResult {
             completed: late,
             chosen,
@@ -3630,11 +3635,12 @@ impl Searcher<'_> {
     /// Backward pruning: every cause is re-tested in the complete model (F test of removing it,
     /// Bonferroni-adjusted as when it entered, and its cross-validated gain); the weakest that
     /// fails leaves, with the causes that build on it, until all pass. Returns the names removed.
-    /// `last`: the design and fit of the model `chosen` as the search left it.
+    /// `last`: the design and fit of the model `chosen` as the search left it; `fold_basis`: the
+    /// base's fit on the test rows of `folds` ([`Projector::fold_basis`]).
     fn prune(
         &self,
         chosen: &mut Vec<Chosen>,
-        folds: &Folds,
+        (folds, fold_basis): (&Folds, &FoldBasis),
         base_fit: &Projector,
         last: (DMat, Projector),
     ) -> Vec<String> {
@@ -3646,11 +3652,12 @@ impl Searcher<'_> {
                 Some(last) => last,
                 None => self.fit_of(base_fit, &self.with(chosen, None)),
             };
-            let cv_full = fit.fold_fits(folds, &x, y).rms();
+            let cv_full = fit.fold_fits(folds, &x, y, Some(fold_basis)).rms();
             let mut weakest: Option<(usize, f64, f64)> = None; // (index, p, cv ratio)
             for j in 0..chosen.len() {
                 let (xr, reduced, p) = self.removal_test(chosen, j, base_fit, &fit);
-                let ratio = reduced.fold_fits(folds, &xr, y).rms() / cv_full.max(1e-300);
+                let ratio =
+                    reduced.fold_fits(folds, &xr, y, Some(fold_basis)).rms() / cv_full.max(1e-300);
                 let fails = p >= self.params.alpha || ratio < 1.0 + 0.5 * self.params.min_gain;
                 if fails && weakest.is_none_or(|(_, bp, br)| p > bp || (p == bp && ratio < br)) {
                     weakest = Some((j, p, ratio));
@@ -5644,10 +5651,17 @@ fn largest_z(estimates: &[Estimate], width: usize) -> f64 {
         .fold(0.0, f64::max)
 }
 
-/// A p-value with its last digits dropped (to a relative 1e-9): a choice between candidates
-/// whose tests differ by rounding alone is then made by their order, not by the rounding.
+/// A p-value's logarithm with its last digits dropped (to a relative 1e-9): a choice between
+/// candidates whose tests differ by rounding alone is then made by their order, not by the
+/// rounding. (Relative: the logarithm of a very significant test, −150 and beyond, carries the
+/// rounding of its F statistic in digits an absolute 1e-9 would keep.)
 fn rounding_free(p: f64) -> f64 {
-    (p.max(f64::MIN_POSITIVE).ln() * 1e9).round()
+    let l = p.max(f64::MIN_POSITIVE).ln();
+    if l == 0.0 {
+        return 0.0;
+    }
+    let unit = 10f64.powi(l.abs().log10().floor() as i32 - 9);
+    (l / unit).round() * unit
 }
 
 /// Which of a model's causes leaves first ([`conclude`], [`Searcher::drop_resting_on_orders`]).

@@ -225,10 +225,15 @@ pub(crate) fn select_rows(m: &DMat, rows: &[usize]) -> DMat {
 
 /// Appends the rows `rows` of `m`, column by column (column-major), to `data`.
 fn gather_rows(m: &DMat, rows: &[usize], data: &mut Vec<f64>) {
+    gather_rows_from(m, 0, rows, data);
+}
+
+/// [`gather_rows`] of the columns of `m` from `first` on.
+fn gather_rows_from(m: &DMat, first: usize, rows: &[usize], data: &mut Vec<f64>) {
     if m.nrows() == 0 {
         return;
     }
-    for column in m.as_slice().chunks_exact(m.nrows()) {
+    for column in m.as_slice()[first * m.nrows()..].chunks_exact(m.nrows()) {
         data.extend(rows.iter().map(|&i| column[i]));
     }
 }
@@ -407,9 +412,19 @@ fn pinv_psd(m: DMat) -> DMat {
     product(as_faer(&scaled), as_faer(&eig.eigenvectors).transpose())
 }
 
+/// The first directions of a model's basis on each fold's test rows, `Q₀_T`, and their Gram
+/// there: what the fold fits of every model extending it share ([`Projector::fold_fits`]),
+/// formed once for a search instead of at each of its steps.
+pub(crate) struct FoldBasis {
+    rank: usize,
+    /// Per fold, `Q₀_T` and `Q₀_TᵀQ₀_T`.
+    folds: Vec<(DMat, DMat)>,
+}
+
 impl<'a> FoldFits<'a> {
     /// The folds' fits of the model with design `x` from the basis `q` of its whitened design
-    /// and the map with `(W X) map = q` ([`Projector::fold_fits`]).
+    /// and the map with `(W X) map = q` ([`Projector::fold_fits`]); `shared`: the first
+    /// directions of `q` on the folds' test rows, where known.
     fn with_basis(
         folds: &'a Folds,
         x: &'a DMat,
@@ -417,16 +432,45 @@ impl<'a> FoldFits<'a> {
         w: &'a DVec,
         q: Cow<'a, DMat>,
         map: Cow<'a, DMat>,
+        shared: Option<&FoldBasis>,
     ) -> FoldFits<'a> {
         let yw = y.component_mul(w);
         let qty = q.tr_mul(&yw);
         let r = q.ncols();
+        let shared = shared.filter(|s| s.rank <= r && s.folds.len() == folds.test.len());
         let fits = folds
             .test
             .iter()
-            .map(|test| {
-                let qt = select_rows(&q, test);
-                let m = DMat::identity(r, r) - gram(as_faer(&qt));
+            .enumerate()
+            .map(|(f, test)| {
+                let (qt, gram_t) = match shared {
+                    // [Q₀_T, Q₁_T] and its Gram from Q₀_T's: only the directions beyond are
+                    // gathered and multiplied.
+                    Some(shared) => {
+                        let (q0t, g0) = &shared.folds[f];
+                        let r0 = shared.rank;
+                        let mut data = Vec::with_capacity(test.len() * r);
+                        data.extend_from_slice(q0t.as_slice());
+                        gather_rows_from(&q, r0, test, &mut data);
+                        let qt = DMat::from_vec(test.len(), r, data);
+                        let q1t = qt.columns(r0, r - r0).into_owned();
+                        let cross = tr_mul(q0t, &q1t);
+                        let mut g = DMat::zeros(r, r);
+                        g.view_mut((0, 0), (r0, r0)).copy_from(g0);
+                        g.view_mut((0, r0), (r0, r - r0)).copy_from(&cross);
+                        g.view_mut((r0, 0), (r - r0, r0))
+                            .copy_from(&cross.transpose());
+                        g.view_mut((r0, r0), (r - r0, r - r0))
+                            .copy_from(&gram(as_faer(&q1t)));
+                        (qt, g)
+                    }
+                    None => {
+                        let qt = select_rows(&q, test);
+                        let g = gram(as_faer(&qt));
+                        (qt, g)
+                    }
+                };
+                let m = DMat::identity(r, r) - gram_t;
                 let g = &qty - qt.tr_mul(&select(&yw, test));
                 FoldFit {
                     qt,
@@ -1207,7 +1251,15 @@ impl Projector {
     }
 
     /// The folds' fits of the projector's model (design `x`, observations `y`), on its basis.
-    pub fn fold_fits<'a>(&'a self, folds: &'a Folds, x: &'a DMat, y: &'a DVec) -> FoldFits<'a> {
+    /// `shared`: the [`Projector::fold_basis`] on `folds` of a fit this one extends, or of this
+    /// one itself (its first directions are then not gathered again).
+    pub fn fold_fits<'a>(
+        &'a self,
+        folds: &'a Folds,
+        x: &'a DMat,
+        y: &'a DVec,
+        shared: Option<&FoldBasis>,
+    ) -> FoldFits<'a> {
         FoldFits::with_basis(
             folds,
             x,
@@ -1215,7 +1267,26 @@ impl Projector {
             &self.w,
             Cow::Borrowed(&self.q),
             Cow::Borrowed(&self.map),
+            shared,
         )
+    }
+
+    /// This fit's basis on the test rows of `folds`, for the fold fits of the models that
+    /// extend it ([`Projector::extended`] keeps it as their first directions): passed to their
+    /// [`Projector::fold_fits`], only the directions they add are gathered and multiplied.
+    pub fn fold_basis(&self, folds: &Folds) -> FoldBasis {
+        FoldBasis {
+            rank: self.q.ncols(),
+            folds: folds
+                .test
+                .iter()
+                .map(|test| {
+                    let qt = select_rows(&self.q, test);
+                    let g = gram(as_faer(&qt));
+                    (qt, g)
+                })
+                .collect(),
+        }
     }
 
     /// `Qᵀ W C` of candidates' columns `C` on the basis' `directions`, from their products
@@ -1782,7 +1853,7 @@ mod tests {
         };
         let base = x.columns(0, 3).into_owned();
         let fit = Projector::fit(&base, &y, &w);
-        let fits = fit.fold_fits(&folds, &base, &y);
+        let fits = fit.fold_fits(&folds, &base, &y, None);
         assert!((fits.rms() - fresh(&base)).abs() < 1e-10 * fresh(&base));
         // A new direction (the sine), and one already in the model (a combination of columns
         // 1 and 2), which must change nothing.
@@ -1793,6 +1864,23 @@ mod tests {
                 |i, j| if j < 3 { base[(i, j)] } else { added[(i, 0)] },
             );
             let (a, b) = (fits.rms_with(&added), fresh(&wide));
+            assert!((a - b).abs() < 1e-9 * b, "{a} vs {b}");
+            // The fit extended by it, its fold fits from the base's directions on the test rows
+            // ([`Projector::fold_basis`]), and the extended model's fold fits scoring a further
+            // column (the periodic one).
+            let extended = fit.extended(&added);
+            let shared = fit.fold_basis(&folds);
+            let fits = extended.fold_fits(&folds, &wide, &y, Some(&shared));
+            assert!((fits.rms() - b).abs() < 1e-9 * b, "{} vs {b}", fits.rms());
+            let further = x.columns(5, 1).into_owned();
+            let widest = DMat::from_fn(
+                n,
+                5,
+                |i, j| {
+                    if j < 4 { wide[(i, j)] } else { further[(i, 0)] }
+                },
+            );
+            let (a, b) = (fits.rms_with(&further), fresh(&widest));
             assert!((a - b).abs() < 1e-9 * b, "{a} vs {b}");
         }
     }
