@@ -803,8 +803,10 @@ fn conclude(
         ..searcher
     };
     let x0 = design(&base.iter().collect::<Vec<_>>(), n);
-    let base_sol = solve(&x0, &obs.values, w);
     let base_fit = Projector::fit(&x0, &obs.values, w);
+    let base_sol = base_fit
+        .solution(&x0, &obs.values)
+        .unwrap_or_else(|| solve(&x0, &obs.values, w));
     let base_cv = base_fit
         .fold_fits(&folds, &x0, &obs.values, None)
         .residuals();
@@ -859,7 +861,9 @@ fn conclude(
         }
         let terms: Vec<Term> = searcher.with(&chosen, None).into_iter().cloned().collect();
         let (x, fit) = searcher.fit_of(&base_fit, &terms.iter().collect::<Vec<_>>());
-        let sol = solve(&x, &obs.values, w);
+        let sol = fit
+            .solution(&x, &obs.values)
+            .unwrap_or_else(|| solve(&x, &obs.values, w));
         let cv = fit.fold_fits(&folds, &x, &obs.values, None).residuals();
         let extended = quality(obs, &sol, &cv);
         let scale = covariance_scale(obs, extended.sigma0);

@@ -974,6 +974,32 @@ impl Projector {
         self.rw.norm_squared()
     }
 
+    /// [`solve`]'s solution for the observations `y` and this fit's design `x`, without a
+    /// factorisation, where the basis spans every column of `x`: the coefficients are then
+    /// unique, `map Qᵀ W y`, and their cofactor `(XᵀW²X)⁻¹ = map mapᵀ` (`W X map = Q`). `None`
+    /// for a design of lower rank, whose minimum-norm solution [`solve`] gives.
+    pub fn solution(&self, x: &DMat, y: &DVec) -> Option<Solution> {
+        let p = self.map.nrows();
+        if self.q.ncols() != p || x.ncols() != p || p == 0 {
+            return None;
+        }
+        let coef = self.coefficients(y);
+        let residuals = y - x * &coef;
+        let rss_w = residuals
+            .iter()
+            .zip(self.w.iter())
+            .map(|(r, w)| (r * w).powi(2))
+            .sum();
+        Some(Solution {
+            cofactor: &self.map * self.map.transpose(),
+            coef,
+            rank: p,
+            residuals,
+            rss_w,
+            observations: self.w.iter().filter(|w| **w > 0.0).count(),
+        })
+    }
+
     /// The least-squares coefficients of `c` on the model's design (minimum norm in the
     /// column-normalised design, as [`solve`]'s).
     pub fn coefficients(&self, c: &DVec) -> DVec {
@@ -1784,6 +1810,35 @@ mod tests {
         });
         let w = DVec::from_fn(n, |i, _| 1.0 + (i % 3) as f64);
         (x, y, w)
+    }
+
+    #[test]
+    fn a_fit_of_full_rank_gives_the_solution_of_a_factorisation() {
+        let n = 300;
+        let (x, y, w) = problem(n);
+        // Columns 0–3 (full rank), fitted at once and as a fit extended by its last column.
+        let full = x.columns(0, 4).into_owned();
+        let reference = solve(&full, &y, &w);
+        let base = Projector::fit(&x.columns(0, 3).into_owned(), &y, &w);
+        for fit in [
+            Projector::fit(&full, &y, &w),
+            base.extended(&x.columns(3, 1).into_owned()),
+        ] {
+            let sol = fit.solution(&full, &y).expect("full rank");
+            assert_eq!(sol.rank, reference.rank);
+            assert_eq!(sol.dof(), reference.dof());
+            assert!((sol.rss_w - reference.rss_w).abs() < 1e-10 * reference.rss_w);
+            assert!((&sol.coef - &reference.coef).amax() < 1e-9 * reference.coef.amax());
+            let scale = reference.cofactor.amax();
+            assert!((&sol.cofactor - &reference.cofactor).amax() < 1e-9 * scale);
+        }
+        // Column 4 is a combination of columns 1 and 2: the minimum-norm solution is solve's.
+        let deficient = x.columns(0, 5).into_owned();
+        assert!(
+            Projector::fit(&deficient, &y, &w)
+                .solution(&deficient, &y)
+                .is_none()
+        );
     }
 
     #[test]
