@@ -2906,7 +2906,7 @@ impl Searcher<'_> {
         } else {
             complete.fit_of(base_fit, &complete.with(&chosen, None))
         };
-        pruned.extend(complete.prune(&mut chosen, (folds, &fold_basis), base_fit, last));
+        pruned.extend(complete.prune(&mut chosen, folds, &fold_basis, base_fit, last));
         SearchResult {
             completed: late,
             chosen,
@@ -3644,7 +3644,8 @@ impl Searcher<'_> {
     fn prune(
         &self,
         chosen: &mut Vec<Chosen>,
-        (folds, fold_basis): (&Folds, &FoldBasis),
+        folds: &Folds,
+        fold_basis: &FoldBasis,
         base_fit: &Projector,
         last: (DMat, Projector),
     ) -> Vec<String> {

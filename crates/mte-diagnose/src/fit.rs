@@ -1696,9 +1696,12 @@ const NARROW_PRODUCT: usize = 8;
 /// [`beyond`] projects the basis out of a block of columns a second time when the first pass
 /// left any column less than this share of its norm. One pass of classical Gram–Schmidt leaves
 /// a component along the basis of about ε √r / ρ of what remains, ρ the share left: 5e-13 at
-/// ρ = 1e-3 and r = 1 000, where the diagnosis' tests and scores are not moved. (Twice always,
-/// as before, cost 7 % of an 8-cycle R-test diagnosis: candidate columns keep 10–50 % of their
-/// norm beyond the model, the next orders of its errors 1 %.)
+/// ρ = 1e-3 and r = 1 000. (Twice always cost 7 % of an 8-cycle R-test diagnosis: candidate
+/// columns keep 10–50 % of their norm beyond the model, the next orders of its errors 1 %. On
+/// 21 realistic datasets of every kind the findings and their estimates came out as with two
+/// passes; one dataset completed its base with the other of two higher orders the data cannot
+/// tell apart (their p-values 3e-12 apart), and detection limits of variants the model nearly
+/// holds, short periods on an R-test, moved by up to 1e-4 of themselves.)
 const REPROJECT_BELOW: f64 = 1e-3;
 
 /// Candidate columns per product with the model's basis in [`Projector::increments`]: wide
