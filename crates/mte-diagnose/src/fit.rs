@@ -71,7 +71,7 @@ pub(crate) fn solve(x: &DMat, y: &DVec, w: &DVec) -> Solution {
     let (n, p) = x.shape();
     let observations = w.iter().filter(|w| **w > 0.0).count();
     if p == 0 {
-        let rss_w = y.iter().zip(w.iter()).map(|(r, w)| (r * w).powi(2)).sum();
+        let rss_w = weighted_rss(y, w);
         return Solution {
             coef: DVec::zeros(0),
             cofactor: DMat::zeros(0, 0),
@@ -104,11 +104,7 @@ pub(crate) fn solve(x: &DMat, y: &DVec, w: &DVec) -> Solution {
     let coef = coef_s.component_mul(&scale);
     let cofactor = DMat::from_fn(p, p, |i, j| cof_s[(i, j)] * scale[i] * scale[j]);
     let residuals = y - x * &coef;
-    let rss_w = residuals
-        .iter()
-        .zip(w.iter())
-        .map(|(r, w)| (r * w).powi(2))
-        .sum();
+    let rss_w = weighted_rss(&residuals, w);
     Solution {
         coef,
         cofactor,
@@ -117,6 +113,15 @@ pub(crate) fn solve(x: &DMat, y: &DVec, w: &DVec) -> Solution {
         rss_w,
         observations,
     }
+}
+
+/// Weighted residual sum of squares `Σ (wᵢ rᵢ)²`.
+fn weighted_rss(residuals: &DVec, w: &DVec) -> f64 {
+    residuals
+        .iter()
+        .zip(w.iter())
+        .map(|(r, w)| (r * w).powi(2))
+        .sum()
 }
 
 /// The whitened, column-normalised design and observations as they are (fewer rows than
@@ -975,11 +980,7 @@ impl Projector {
         }
         let coef = self.coefficients(y);
         let residuals = y - x * &coef;
-        let rss_w = residuals
-            .iter()
-            .zip(self.w.iter())
-            .map(|(r, w)| (r * w).powi(2))
-            .sum();
+        let rss_w = weighted_rss(&residuals, &self.w);
         Some(Solution {
             cofactor: &self.map * self.map.transpose(),
             coef,
