@@ -426,6 +426,13 @@ pub(crate) struct FoldBasis {
     folds: Vec<(DMat, DMat)>,
 }
 
+/// The rows `rows` of a basis `q` and their Gram.
+fn rows_and_gram(q: &DMat, rows: &[usize]) -> (DMat, DMat) {
+    let qt = select_rows(q, rows);
+    let g = gram(as_faer(&qt));
+    (qt, g)
+}
+
 impl<'a> FoldFits<'a> {
     /// The folds' fits of the model with design `x` from the basis `q` of its whitened design
     /// and the map with `(W X) map = q` ([`Projector::fold_fits`]); `shared`: the first
@@ -469,11 +476,7 @@ impl<'a> FoldFits<'a> {
                             .copy_from(&gram(as_faer(&q1t)));
                         (qt, g)
                     }
-                    None => {
-                        let qt = select_rows(&q, test);
-                        let g = gram(as_faer(&qt));
-                        (qt, g)
-                    }
+                    None => rows_and_gram(&q, test),
                 };
                 let m = DMat::identity(r, r) - gram_t;
                 let g = &qty - qt.tr_mul(&select(&yw, test));
@@ -1297,11 +1300,7 @@ impl Projector {
             folds: folds
                 .test
                 .iter()
-                .map(|test| {
-                    let qt = select_rows(&self.q, test);
-                    let g = gram(as_faer(&qt));
-                    (qt, g)
-                })
+                .map(|test| rows_and_gram(&self.q, test))
                 .collect(),
         }
     }
