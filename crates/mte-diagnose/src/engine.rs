@@ -2561,17 +2561,14 @@ impl Searcher<'_> {
             let p_of = |inc: &Increment| {
                 (f_test(rss, inc.delta_rss, inc.new_rank, dof) * variants_tested as f64).min(1.0)
             };
+            // (Candidates the data cannot tell apart rank by their place in the library, and
+            // a cut takes them all: [`rank_by_significance`].)
+            let key = |g: &usize| (p_of(&graded[*g].2), graded[*g].2.delta_rss);
             let mut order: Vec<usize> = (0..graded.len()).collect();
-            order.sort_by(|&a, &b| {
-                p_of(&graded[a].2)
-                    .total_cmp(&p_of(&graded[b].2))
-                    .then(graded[b].2.delta_rss.total_cmp(&graded[a].2.delta_rss))
-            });
+            rank_by_significance(&mut order, key);
             // (Independent of each other: in parallel, applied in order.)
-            let to_refine: Vec<usize> = order
-                .iter()
-                .take(params.shortlist)
-                .copied()
+            let to_refine: Vec<usize> = first_through_ties(order, params.shortlist, key)
+                .into_iter()
                 .filter(|&g| p_of(&graded[g].2) < REFINE_LEVEL * params.alpha)
                 .collect();
             // Every peak is refined and the best refined one kept: a grid point can sit up to a
@@ -2612,7 +2609,8 @@ impl Searcher<'_> {
                 .iter()
                 .map(|(ci, vi, inc, _)| (*ci, *vi, p_of(inc), inc.delta_rss / rss.max(1e-300)))
                 .collect();
-            scored.sort_by(|a, b| a.2.total_cmp(&b.2).then(b.3.total_cmp(&a.3)));
+            let key = |s: &Scored| (s.2, s.3);
+            rank_by_significance(&mut scored, key);
             let mut ranking = Vec::new();
             let mut best_capped: Option<(String, f64, usize)> = None;
             // The held-out RMS of the significant ones (independent: in parallel): the most
@@ -2620,19 +2618,23 @@ impl Searcher<'_> {
             // ordinary errors ([`waits_for_ordinary`]).
             // (A capped cause does not take an open one's place: the best of them beside.)
             let rigid = |s: &Scored| !waits_for_ordinary(obs, &variants.header(s.0, s.1));
-            let mut shortlisted: Vec<Scored> = scored
-                .iter()
-                .filter(|s| !capped[s.0])
-                .take(params.shortlist)
-                .copied()
-                .collect();
-            let more: Vec<Scored> = scored
-                .iter()
-                .filter(|s| !capped[s.0] && rigid(s) && !shortlisted.contains(s))
-                .take(params.shortlist - shortlisted.iter().filter(|s| rigid(s)).count())
-                .chain(scored.iter().find(|s| capped[s.0]))
-                .copied()
-                .collect();
+            let mut shortlisted: Vec<Scored> = first_through_ties(
+                scored.iter().filter(|s| !capped[s.0]).copied(),
+                params.shortlist,
+                key,
+            );
+            let rigid_shortlisted = shortlisted.iter().filter(|s| rigid(s)).count();
+            let more: Vec<Scored> = first_through_ties(
+                scored
+                    .iter()
+                    .filter(|s| !capped[s.0] && rigid(s) && !shortlisted.contains(s))
+                    .copied(),
+                params.shortlist.saturating_sub(rigid_shortlisted),
+                key,
+            )
+            .into_iter()
+            .chain(scored.iter().find(|s| capped[s.0]).copied())
+            .collect();
             shortlisted.extend(more);
             // A drift must show in the differences between visits of the same pose: over a
             // single pass, a drift of a time constant fitted to the order the poses were
@@ -5656,17 +5658,58 @@ fn largest_z(estimates: &[Estimate], width: usize) -> f64 {
         .fold(0.0, f64::max)
 }
 
-/// A p-value's logarithm with its last digits dropped (to a relative 1e-9): a choice between
+/// A p-value's logarithm with its last digits dropped ([`rounded`]): a choice between
 /// candidates whose tests differ by rounding alone is then made by their order, not by the
-/// rounding. (Relative: the logarithm of a very significant test, −150 and beyond, carries the
+/// rounding. (Of the logarithm: a very significant test's, −150 and beyond, carries the
 /// rounding of its F statistic in digits an absolute 1e-9 would keep.)
 fn rounding_free(p: f64) -> f64 {
-    let l = p.max(f64::MIN_POSITIVE).ln();
-    if l == 0.0 {
-        return 0.0;
+    rounded(p.max(f64::MIN_POSITIVE).ln())
+}
+
+/// `x` with its last digits dropped (to a relative 1e-9): what rounding alone (another CPU,
+/// another summation order, another projection) can change of a figure is gone.
+fn rounded(x: f64) -> f64 {
+    if x == 0.0 || !x.is_finite() {
+        return x;
     }
-    let unit = 10f64.powi(l.abs().log10().floor() as i32 - 9);
-    (l / unit).round() * unit
+    let unit = 10f64.powi(x.abs().log10().floor() as i32 - 9);
+    (x / unit).round() * unit
+}
+
+/// A candidate's place by significance, `(p-value, what it explains)`: the smallest p-value
+/// first, then the most explained. What differs by rounding alone does not rank
+/// ([`rounding_free`], [`rounded`]).
+fn significance_rank((p, explained): (f64, f64)) -> (f64, f64) {
+    (rounding_free(p), -rounded(explained))
+}
+
+/// Sorts candidates by significance ([`significance_rank`] of `key(c)`). Candidates the data
+/// cannot tell apart keep their order, the library's.
+fn rank_by_significance<T>(candidates: &mut [T], key: impl Fn(&T) -> (f64, f64)) {
+    candidates.sort_by(|a, b| {
+        let (a, b) = (significance_rank(key(a)), significance_rank(key(b)));
+        a.0.total_cmp(&b.0).then(a.1.total_cmp(&b.1))
+    });
+}
+
+/// The first `n` of candidates ranked by [`rank_by_significance`] with `key`, and those after
+/// them that rank alike with the last one taken: a cut never falls between candidates the data
+/// cannot tell apart (an R-test's squareness EA0Z and the linear term of the angular error EAZ,
+/// whose tests differ in the 14th digit, then both reach the shortlist, where the simpler wins).
+fn first_through_ties<T>(
+    ranked: impl IntoIterator<Item = T>,
+    n: usize,
+    key: impl Fn(&T) -> (f64, f64),
+) -> Vec<T> {
+    let mut taken: Vec<T> = Vec::new();
+    for c in ranked {
+        let alike = |last: &T| significance_rank(key(last)) == significance_rank(key(&c));
+        if taken.len() >= n && !taken.last().is_some_and(alike) {
+            break;
+        }
+        taken.push(c);
+    }
+    taken
 }
 
 /// Which of a model's causes leaves first ([`conclude`], [`Searcher::drop_resting_on_orders`]).
@@ -5943,7 +5986,8 @@ fn is_iso_squareness_of(name: &str, t: &Term) -> bool {
 }
 
 /// Of `(entry, variant, cv rms)` candidates in order, the one of lowest held-out RMS, save that
-/// within 1 % of it the simpler cause wins (parsimony; `cost`: [`complexity`]).
+/// within 1 % of it the simpler cause wins (parsimony; `cost`: [`complexity`]). Of equally
+/// simple ones whose RMS differ by rounding alone ([`rounded`]), the first.
 fn most_parsimonious(
     candidates: impl Iterator<Item = (usize, usize, f64)>,
     cost: impl Fn(usize, usize) -> (usize, usize),
@@ -5953,7 +5997,7 @@ fn most_parsimonious(
         Some((bc, bv, br)) => {
             let (b_cost, t_cost) = (cost(bc, bv), cost(ci, vi));
             let better = if (r - br).abs() <= 0.01 * br {
-                t_cost < b_cost || (t_cost == b_cost && r < br)
+                t_cost < b_cost || (t_cost == b_cost && rounded(r) < rounded(br))
             } else {
                 r < br
             };
@@ -6422,6 +6466,45 @@ mod tests {
         assert!(rounding_free(3.1314e-3) < rounding_free(3.1315e-3));
         assert!(rounding_free(0.0) < rounding_free(1e-300));
         assert!(rounding_free(1e-300) < rounding_free(1e-299));
+    }
+
+    #[test]
+    fn candidates_that_differ_by_rounding_keep_their_order_and_a_cut_takes_them_all() {
+        // (id, p-value, share explained): EA0Z and the linear term of EAZ on an R-test, as
+        // they came out of one run with their p-values 2e-14 apart, between two others.
+        let key = |c: &(usize, f64, f64)| (c.1, c.2);
+        let mut ranked = vec![
+            (0, 1e-20, 0.05),
+            (1, 6.524_022_127_708_914e-31, 0.072_745_485_909_747_36),
+            (2, 6.524_022_127_707_5e-31, 0.072_745_485_909_747_61),
+            (3, 1e-60, 0.2),
+        ];
+        rank_by_significance(&mut ranked, key);
+        let ids = |v: &[(usize, f64, f64)]| v.iter().map(|c| c.0).collect::<Vec<_>>();
+        // The rounder p-value of 2 does not put it ahead of 1.
+        assert_eq!(ids(&ranked), [3, 1, 2, 0]);
+        assert_eq!(ids(&first_through_ties(ranked.clone(), 1, key)), [3]);
+        assert_eq!(ids(&first_through_ties(ranked.clone(), 2, key)), [3, 1, 2]);
+        assert_eq!(ids(&first_through_ties(ranked.clone(), 3, key)), [3, 1, 2]);
+        assert_eq!(
+            ids(&first_through_ties(ranked.clone(), 0, key)),
+            Vec::<usize>::new()
+        );
+        // Of two equally simple causes whose held-out RMS differ by rounding, the first.
+        let pick = most_parsimonious(
+            [
+                (1, 0, 1.779_569_046_658_035e-3),
+                (2, 0, 1.779_569_046_658_024_6e-3),
+            ]
+            .into_iter(),
+            |_, _| (1, 0),
+        );
+        assert_eq!(pick.map(|p| p.0), Some(1));
+        // A real difference still decides.
+        let pick = most_parsimonious([(1, 0, 1.78e-3), (2, 0, 1.77e-3)].into_iter(), |_, _| {
+            (1, 0)
+        });
+        assert_eq!(pick.map(|p| p.0), Some(2));
     }
 
     #[test]
