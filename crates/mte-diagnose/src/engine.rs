@@ -5683,13 +5683,17 @@ fn significance_rank((p, explained): (f64, f64)) -> (f64, f64) {
     (rounding_free(p), -rounded(explained))
 }
 
-/// Sorts candidates by significance ([`significance_rank`] of `key(c)`). Candidates the data
-/// cannot tell apart keep their order, the library's.
-fn rank_by_significance<T>(candidates: &mut [T], key: impl Fn(&T) -> (f64, f64)) {
-    candidates.sort_by(|a, b| {
-        let (a, b) = (significance_rank(key(a)), significance_rank(key(b)));
-        a.0.total_cmp(&b.0).then(a.1.total_cmp(&b.1))
-    });
+/// Sorts candidates by significance ([`significance_rank`] of `key(c)`, worked out once per
+/// candidate). Candidates the data cannot tell apart keep their order, the library's.
+fn rank_by_significance<T: Copy>(candidates: &mut [T], key: impl Fn(&T) -> (f64, f64)) {
+    let mut ranked: Vec<((f64, f64), T)> = candidates
+        .iter()
+        .map(|c| (significance_rank(key(c)), *c))
+        .collect();
+    ranked.sort_by(|(a, _), (b, _)| a.0.total_cmp(&b.0).then(a.1.total_cmp(&b.1)));
+    for (c, (_, r)) in candidates.iter_mut().zip(ranked) {
+        *c = r;
+    }
 }
 
 /// The first `n` of candidates ranked by [`rank_by_significance`] with `key`, and those after
