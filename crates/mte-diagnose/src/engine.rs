@@ -855,7 +855,7 @@ fn conclude(
     let mut rests_on_orders: Vec<String> = Vec::new();
     let mut exchanged = search.exchanged;
     let span = record_span(obs);
-    let (terms, x, sol, fit, extended, cov, hyper_rows, extended_parameters) = loop {
+    let (terms, x, sol, fit, extended, cov, hyper_rows, extended_parameters, finals) = loop {
         if let Some(span) = span {
             exchanged.extend(drift_courses(&searcher, &mut chosen, &base_fit, span));
         }
@@ -923,7 +923,16 @@ fn conclude(
             };
             own.max(largest_z(&changes, changes.len()))
         };
-        let Some((k, held)) = leaving(&held, |k| z(&extended_parameters, &cov, k)) else {
+        // Every cause passes the search's removal test (its F test) in the final model too.
+        // Where a cause left above, the residual scatter grows, and one that passed narrowly in
+        // the search can fail now (a pitch of X at p = 1.5e-6 in the search, 0.065 once a roll
+        // of Y the base and the other causes hold had left): it leaves as pruned, with what
+        // builds on it.
+        let finals = searcher.removal_p_values(&chosen, &base_fit, &fit);
+        let leaves = leaving(&held, |k| z(&extended_parameters, &cov, k))
+            .map(|(k, held)| (k, held, false))
+            .or_else(|| least_significant(&finals, params.alpha).map(|k| (k, None, true)));
+        let Some((k, held, insignificant)) = leaves else {
             break (
                 terms,
                 x,
@@ -933,16 +942,18 @@ fn conclude(
                 cov,
                 hyper_rows,
                 extended_parameters,
+                finals,
             );
         };
         // A cause the base's next orders would hold, or whose size they leave undetermined,
         // rests on the base's orders alone: the report lists it as not separable from them.
         // (One the base and the other causes hold without those orders — two components of a
         // periodic error drawn to one period — leaves as pruned.)
-        let on_orders = match held {
-            Some(held) => held == Held::ByOrders,
-            None => z(&parameters(&terms, &sol.coef, &plain), &plain, k) >= 2.0,
-        };
+        let on_orders = !insignificant
+            && match held {
+                Some(held) => held == Held::ByOrders,
+                None => z(&parameters(&terms, &sol.coef, &plain), &plain, k) >= 2.0,
+            };
         if on_orders {
             let others: Vec<&Term> = causes
                 .iter()
@@ -974,9 +985,8 @@ fn conclude(
             });
             rests_on_orders.push(causes[k].name.clone());
         }
-        pruned.extend(searcher.remove(&mut chosen, k, &base_fit, held.is_some()));
+        pruned.extend(searcher.remove(&mut chosen, k, &base_fit, held.is_some() || insignificant));
     };
-    let finals = searcher.removal_p_values(&chosen, &base_fit, &fit);
     let mut findings: Vec<Finding> = chosen
         .iter()
         .enumerate()
@@ -5735,6 +5745,20 @@ fn leaving(held: &[Option<Held>], z: impl Fn(usize) -> f64) -> Option<(usize, Op
         .map(|(k, _)| (k, None))
 }
 
+/// The cause whose removal from the final model is least significant (the largest of the
+/// Bonferroni-adjusted p-values `finals`, the first of equal ones), if that one is not below
+/// `alpha` ([`conclude`]).
+fn least_significant(finals: &[f64], alpha: f64) -> Option<usize> {
+    let (k, p) = finals
+        .iter()
+        .enumerate()
+        .fold(None, |best: Option<(usize, f64)>, (k, &p)| match best {
+            Some((_, bp)) if bp >= p => best,
+            _ => Some((k, p)),
+        })?;
+    (p >= alpha).then_some(k)
+}
+
 /// Whether `c` may be a next order of an error of a model (`in_model` tells its terms by
 /// name): a completion ([`Role::Completion`]) whose term it builds on is in the model. The
 /// caller checks that its own term is not in it yet.
@@ -6533,5 +6557,16 @@ mod tests {
         // Else the least determined below 2; none when every one is determined.
         assert_eq!(leaving(&[None; 4], by), Some((2, None)));
         assert_eq!(leaving(&[None; 2], |_| 2.5), None);
+    }
+
+    #[test]
+    fn the_cause_least_significant_in_the_final_model_leaves_if_it_fails_the_test() {
+        // The largest adjusted p-value, if not below the level; of equal ones (p capped at 1
+        // by the Bonferroni factor) the first.
+        assert_eq!(least_significant(&[1e-9, 0.065, 2e-4], 1e-3), Some(1));
+        assert_eq!(least_significant(&[1.0, 1e-9, 1.0], 1e-3), Some(0));
+        assert_eq!(least_significant(&[1e-9, 1e-3], 1e-3), Some(1));
+        assert_eq!(least_significant(&[1e-9, 9.9e-4], 1e-3), None);
+        assert_eq!(least_significant(&[], 1e-3), None);
     }
 }
