@@ -62,6 +62,22 @@ impl CsvTable {
             let fields: Vec<String> = t.split(',').map(|f| f.trim().to_string()).collect();
             match &headers {
                 None => {
+                    // A spreadsheet set to a decimal comma writes `;` between fields, and some
+                    // exports write tabs: one field with either in it is such a file.
+                    if let [h] = &fields[..] {
+                        if let Some(sep) = [';', '\t'].into_iter().find(|&c| h.contains(c)) {
+                            return Err(err(
+                                line,
+                                format!(
+                                    "the header is one field with {} in it: fields must be \
+                                     separated by commas, numbers written with a decimal point \
+                                     (export as comma-separated values with `.` as the decimal \
+                                     mark)",
+                                    if sep == ';' { "`;`" } else { "tabs" }
+                                ),
+                            ));
+                        }
+                    }
                     for (j, h) in fields.iter().enumerate() {
                         if h.is_empty() {
                             return Err(err(line, format!("column {} has an empty name", j + 1)));
@@ -281,5 +297,16 @@ mod tests {
         assert_eq!(line_of("# only\n\n"), 0);
         assert_eq!(line_of("\na,a\n"), 2);
         assert_eq!(line_of("a,,b\n"), 1);
+        // Another separator is named on the header line, not met as a count of fields later.
+        let e = CsvTable::parse("# run 1\nx_mm;e_um\n0;1,5\n", "x.csv").unwrap_err();
+        assert_eq!(e.line, 2);
+        assert!(
+            e.message.contains("`;`") && e.message.contains("decimal point"),
+            "{e}"
+        );
+        let e = CsvTable::parse("x_mm\te_um\n0\t1.5\n", "x.csv").unwrap_err();
+        assert!(e.message.contains("tabs"), "{e}");
+        // A one-column table is still one.
+        assert_eq!(CsvTable::parse("x_mm\n0\n", "x.csv").unwrap().len(), 1);
     }
 }
