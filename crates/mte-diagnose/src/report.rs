@@ -656,6 +656,18 @@ fn unexplained(d: &Diagnosis) -> String {
             significant(d.extended.sigma0),
             d.extended.chi2_p_value.map(p_text).unwrap_or_default()
         ));
+        if let (Some(stated), true) = (
+            d.stated_noise,
+            parts.is_empty() && d.outliers.is_empty() && d.extended.sigma0 <= GROSS_MISFIT,
+        ) {
+            // A scatter above the stated noise with no pattern in it: most often a noise stated
+            // too small (an instrument's resolution given for its repeatability).
+            text.push_str(&format!(
+                " The structure tests (trends and periods along each variable, direction, set-ups) find no pattern in them: a scatter without structure is the measurement's own, about {} where {} is stated. Check the stated noise (the instrument's repeatability in these conditions, not its resolution); many causes below the detection limits at once would leave such a scatter too.",
+                level(d.quantity, d.extended.sigma0 * stated),
+                level(d.quantity, stated)
+            ));
+        }
         if d.extended.sigma0 > GROSS_MISFIT {
             text.push_str(" Residuals this large are no machine error of a few µm or µrad: check the dataset itself — the units of each column, the axes' signs and directions in the machine file, the stated noise, the offsets of targets or reflectors (a table that leaves them out, or states them as zeros, for readings taken with them).");
         }

@@ -148,6 +148,53 @@ fn scatter_above_the_stated_noise_within_its_tolerance_is_said_in_words() {
     }
 }
 
+/// A clean axis whose readings scatter 4 × the noise its manifest states (its resolution given
+/// for its repeatability): nothing is named, and the verdict says that the scatter has no
+/// structure, how large it is against the noise stated, and to check that noise.
+#[test]
+fn scatter_far_above_the_stated_noise_without_structure_points_at_the_stated_noise() {
+    let extra = Normal::new(0.0, 15f64.sqrt() * NOISE_UM).unwrap();
+    let path = write_runs(
+        "scatter-4",
+        "X",
+        &dense_targets(),
+        NOISE_UM,
+        5,
+        4.0,
+        |_, _, _, i| 2.0 + extra.sample(&mut ChaCha8Rng::seed_from_u64(2000 + i as u64)),
+    );
+    let d = run(&path);
+    assert_eq!(d.verdict, mte_diagnose::Verdict::Unexplained);
+    assert!(
+        d.findings.is_empty() && d.remaining_structure.is_empty(),
+        "{:?} {:?}",
+        d.findings.iter().map(|f| &f.name).collect::<Vec<_>>(),
+        d.remaining_structure
+    );
+    // The scatter stated is σ0 times the stated noise: about 4 × (σ0's own scatter over a few
+    // hundred readings is a few %).
+    assert!(
+        (3.5..4.5).contains(&d.extended.sigma0),
+        "σ0 {}",
+        d.extended.sigma0
+    );
+    let text = mte_diagnose::report::markdown(&d, "scatter-4");
+    let said = "a scatter without structure is the measurement's own, about ";
+    let at = text
+        .find(said)
+        .unwrap_or_else(|| panic!("{said} not in:\n{text}"));
+    let rest = &text[at + said.len()..];
+    let (scatter, rest) = rest.split_once(" µm where ").unwrap();
+    let scatter: f64 = scatter.parse().unwrap();
+    assert!(
+        (scatter - d.extended.sigma0 * NOISE_UM).abs() < 0.01,
+        "{scatter} µm against σ0 {}",
+        d.extended.sigma0
+    );
+    assert!(rest.starts_with("0.300 µm is stated"), "{rest}");
+    assert!(text.contains("Check the stated noise"));
+}
+
 /// A screw worn where the axis works most: the reversal grows along X (ISO 230-2 states it at
 /// every target). The reversal and its change along X are named, each within 2 u: the mean
 /// reversal over the targets and the change from the middle to the end.
