@@ -164,6 +164,12 @@ pub fn markdown(d: &Diagnosis, title: &str) -> String {
                 "a cause smaller than what these data could have shown (listed below)"
             }
         ),
+        // Below it by more than chance: the noise stated is larger than the readings show, and
+        // the uncertainties, which never take less than it, are wider than the data need.
+        Some(p) if stated && 1.0 - p < d.alpha && q.sigma0 < 1.0 => format!(
+            " The scatter is {:.2} × the stated noise: less than chance gives, so the readings repeat better than the noise stated; the uncertainties, which take the stated noise where the scatter is below it, are wider than these data need.",
+            q.sigma0
+        ),
         _ => String::new(),
     };
     match d.verdict {

@@ -148,6 +148,34 @@ fn scatter_above_the_stated_noise_within_its_tolerance_is_said_in_words() {
     }
 }
 
+/// A clean axis whose manifest states 4 × the noise its readings have: nothing is named, and the
+/// verdict says that the scatter is below the stated noise by more than chance and that the
+/// uncertainties, which take the stated noise, are wider than the data need.
+#[test]
+fn scatter_far_below_the_stated_noise_is_said_in_words() {
+    let path = write_runs(
+        "overstated",
+        "X",
+        &dense_targets(),
+        NOISE_UM,
+        6,
+        4.0,
+        |_, _, _, _| 2.0,
+    );
+    let manifest = std::fs::read_to_string(&*path).unwrap();
+    let stated = manifest.replace(&format!("\"noise_um\": {NOISE_UM}"), "\"noise_um\": 1.2");
+    assert_ne!(stated, manifest);
+    std::fs::write(&*path, stated).unwrap();
+    let d = run(&path);
+    assert!(d.no_discrepancy(), "{:?}", d.verdict);
+    assert!((0.2..0.3).contains(&d.base.sigma0), "σ0 {}", d.base.sigma0);
+    let text = mte_diagnose::report::markdown(&d, "overstated");
+    assert!(
+        text.contains("× the stated noise: less than chance gives"),
+        "{text}"
+    );
+}
+
 /// A clean axis whose readings scatter 4 × the noise its manifest states (its resolution given
 /// for its repeatability): nothing is named, and the verdict says that the scatter has no
 /// structure, how large it is against the noise stated, and to check that noise.
