@@ -109,6 +109,21 @@ fn clean_axis_data_yields_no_discovery() {
     }
 }
 
+/// Runs of a clean axis (a constant 2 µm) stating [`NOISE_UM`], whose readings scatter by
+/// `extra_um` more (independent, from seeds `seed` + reading index).
+fn clean_runs_scattering(name: &str, extra_um: f64, seed: u64) -> common::Dataset {
+    let extra = Normal::new(0.0, extra_um).unwrap();
+    write_runs(
+        name,
+        "X",
+        &dense_targets(),
+        NOISE_UM,
+        5,
+        4.0,
+        |_, _, _, i| 2.0 + extra.sample(&mut ChaCha8Rng::seed_from_u64(seed + i as u64)),
+    )
+}
+
 /// A clean axis whose readings scatter 1.28 × the noise its manifest states (a stated noise is
 /// rarely known better than that): no discrepancy is claimed, and the verdict says in words
 /// that the χ² test rejects the stated noise, by how much, and what may hide in the excess. With
@@ -117,16 +132,7 @@ fn clean_axis_data_yields_no_discovery() {
 fn scatter_above_the_stated_noise_within_its_tolerance_is_said_in_words() {
     let excess = "× the stated noise: more than chance gives";
     for (extra, said) in [(0.8, true), (0.0, false)] {
-        let extra = Normal::new(0.0, extra * NOISE_UM).unwrap();
-        let path = write_runs(
-            "scatter",
-            "X",
-            &dense_targets(),
-            NOISE_UM,
-            5,
-            4.0,
-            |_, _, _, i| 2.0 + extra.sample(&mut ChaCha8Rng::seed_from_u64(1000 + i as u64)),
-        );
+        let path = clean_runs_scattering("scatter", extra * NOISE_UM, 1000);
         let d = run(&path);
         assert!(
             d.no_discrepancy(),
@@ -181,16 +187,7 @@ fn scatter_far_below_the_stated_noise_is_said_in_words() {
 /// structure, how large it is against the noise stated, and to check that noise.
 #[test]
 fn scatter_far_above_the_stated_noise_without_structure_points_at_the_stated_noise() {
-    let extra = Normal::new(0.0, 15f64.sqrt() * NOISE_UM).unwrap();
-    let path = write_runs(
-        "scatter-4",
-        "X",
-        &dense_targets(),
-        NOISE_UM,
-        5,
-        4.0,
-        |_, _, _, i| 2.0 + extra.sample(&mut ChaCha8Rng::seed_from_u64(2000 + i as u64)),
-    );
+    let path = clean_runs_scattering("scatter-4", 15f64.sqrt() * NOISE_UM, 2000);
     let d = run(&path);
     assert_eq!(d.verdict, mte_diagnose::Verdict::Unexplained);
     assert!(
