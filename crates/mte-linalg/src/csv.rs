@@ -3,7 +3,8 @@
 //!
 //! Rules: the first non-comment line is the header; blank lines and lines starting with `#` are
 //! skipped; fields are trimmed; no quoting (our formats have no commas inside fields). Numbers
-//! must be finite: `NaN` and `inf` are rejected with the line and column.
+//! must be finite: `NaN` and `inf` are rejected with the line and column. A header that is one
+//! field with `;` or tabs in it is rejected as a file with another separator.
 //!
 //! ```
 //! use mte_linalg::csv::CsvTable;
@@ -43,8 +44,8 @@ impl CsvTable {
     /// Parses `text`; `source_name` names the file in errors.
     ///
     /// # Errors
-    /// [`CsvError`] for an empty table, duplicate or empty column names, or a row with another
-    /// number of fields than the header.
+    /// [`CsvError`] for an empty table, duplicate or empty column names, a header of one field
+    /// with `;` or tabs in it, or a row with another number of fields than the header.
     pub fn parse(text: &str, source_name: &str) -> Result<CsvTable, CsvError> {
         let err = |line, message: String| CsvError {
             source_name: source_name.to_string(),
