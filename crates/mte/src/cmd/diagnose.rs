@@ -10,7 +10,8 @@ use mte::CliError;
 /// Arguments of `mte diagnose`.
 #[derive(clap::Args)]
 pub struct Args {
-    /// The dataset's manifest (JSON, format `mte-dataset/1`; see docs/formats.md).
+    /// The dataset's manifest: JSON, `mte-dataset/1` (axis runs, tracker lengths, 3-D points;
+    /// docs/formats-diagnose.md) or `mte-rtest/1` (R-test; docs/formats.md).
     pub manifest: PathBuf,
     /// Folder for the report (report.md, diagnosis.json, one SVG of residuals per finding).
     #[arg(long, default_value = "out/diagnose")]
