@@ -6,6 +6,7 @@
 use std::borrow::Cow;
 use std::collections::{BTreeMap, HashMap};
 
+use mte_linalg::progress::{NoProgress, Progress};
 use mte_linalg::{DMat, DVec, stats};
 use rayon::prelude::*;
 use serde::Serialize;
@@ -630,6 +631,33 @@ pub fn diagnose(
     candidates: &[Box<dyn Candidate>],
     params: &DiagnoseParams,
 ) -> Result<Diagnosis> {
+    diagnose_with_progress(obs, base, candidates, params, &NoProgress)
+}
+
+/// The work units [`diagnose_with_progress`] reports with `params`: the preparation (the base's
+/// fit and every candidate's products), the search on all data, each outer fold's search, and
+/// the final model with its tests and intervals.
+pub fn progress_units(params: &DiagnoseParams) -> u64 {
+    let outer = if params.outer_folds >= 2 {
+        params.outer_folds
+    } else {
+        0
+    };
+    3 + outer as u64
+}
+
+/// [`diagnose`], reporting to `progress` each of its [`progress_units`] as it finishes (the
+/// search on all data and the outer folds' run at once: their units come as each ends).
+///
+/// # Errors
+/// As [`diagnose`].
+pub fn diagnose_with_progress(
+    obs: &Observations,
+    base: Vec<Term>,
+    candidates: &[Box<dyn Candidate>],
+    params: &DiagnoseParams,
+    progress: &dyn Progress,
+) -> Result<Diagnosis> {
     obs.validate()?;
     check_params(params)?;
     let n = obs.len();
@@ -720,13 +748,15 @@ pub fn diagnose(
         params.folds,
         params.blocks_per_fold,
     );
+    progress.inc(1);
     // The search on all data and the outer folds' searches are independent: run them together.
     // The conclusions from the search on all data (the final fits, tests and report) need not
     // wait for the outer folds either.
     let (concluded, held_out) = rayon::join(
         || {
             let (search, _) = searcher.search(&w_s, &folds_s, None, base_fit.clone());
-            conclude(
+            progress.inc(1);
+            let concluded = conclude(
                 obs,
                 &base,
                 left_out.not_separable,
@@ -736,12 +766,14 @@ pub fn diagnose(
                 &w,
                 thinned.as_deref(),
                 search,
-            )
+            );
+            progress.inc(1);
+            concluded
         },
         || {
             outer
                 .as_ref()
-                .map(|outer| searcher.held_out(&w_s, &base_fit, outer))
+                .map(|outer| searcher.held_out(&w_s, &base_fit, outer, progress))
         },
     );
     let mut diagnosis = concluded?;
@@ -3817,7 +3849,13 @@ impl Searcher<'_> {
     /// The outer folds: for each, the base model and the whole search on the other folds
     /// predict it. `base_fit`: the base's fit under `w`, which
     /// each fold downdates for its held-out rows.
-    fn held_out(&self, w: &DVec, base_fit: &Projector, outer: &Folds) -> HeldOut {
+    fn held_out(
+        &self,
+        w: &DVec,
+        base_fit: &Projector,
+        outer: &Folds,
+        progress: &dyn Progress,
+    ) -> HeldOut {
         let obs = self.obs;
         let n = obs.len();
         // Per fold: (observation, base residual, diagnosed residual) of its held-out rows, and
@@ -3876,6 +3914,7 @@ impl Searcher<'_> {
                     .map(|(k, &i)| (i, base[k], diagnosed[k]))
                     .collect();
                 let names = chosen.iter().map(|c| c.term.name.clone()).collect();
+                progress.inc(1);
                 (residuals, names)
             })
             .collect();

@@ -20,9 +20,11 @@ pub use data::{Observations, Variable, VariableKind};
 pub use engine::{
     Compound, DETECTION_POWER, DetectionLimit, DiagnoseParams, Diagnosis, Exchange, Finding,
     FirstOrderFit, FitQuality, HeldOut, Outlier, Rival, VariantLimit, Verdict, diagnose,
+    diagnose_with_progress, progress_units,
 };
 pub use instruments::{load, load_with_noise};
 pub use model::{BaseModelUsed, DriftOf, Effects, ObservationModel, Prepared, prepare};
+pub use mte_linalg::progress::{NoProgress, Progress};
 pub use structure::StructureTest;
 pub use term::{Estimate, Family, Interval, Quantity, Summary, Term};
 

@@ -158,7 +158,26 @@ impl Prepared {
     /// # Errors
     /// As [`crate::diagnose`].
     pub fn diagnose(self, params: &crate::DiagnoseParams) -> Result<crate::Diagnosis> {
-        let mut d = crate::diagnose(&self.observations, self.base, &self.candidates, params)?;
+        self.diagnose_with_progress(params, &crate::NoProgress)
+    }
+
+    /// [`Prepared::diagnose`], reporting to `progress` ([`crate::diagnose_with_progress`]; its
+    /// units in all: [`crate::progress_units`]).
+    ///
+    /// # Errors
+    /// As [`crate::diagnose`].
+    pub fn diagnose_with_progress(
+        self,
+        params: &crate::DiagnoseParams,
+        progress: &dyn crate::Progress,
+    ) -> Result<crate::Diagnosis> {
+        let mut d = crate::diagnose_with_progress(
+            &self.observations,
+            self.base,
+            &self.candidates,
+            params,
+            progress,
+        )?;
         if let Some(note) = ordinary_errors_note(&self.observations, &self.base_model.spec, &d) {
             d.notes.push(note);
         }

@@ -109,6 +109,37 @@ fn clean_axis_data_yields_no_discovery() {
     }
 }
 
+/// The progress a diagnosis reports adds up to its units ([`mte_diagnose::progress_units`]),
+/// and reporting it changes nothing in the result.
+#[test]
+fn a_diagnosis_reports_each_of_its_progress_units_once() {
+    use std::sync::atomic::{AtomicU64, Ordering};
+    let path = clean_runs_scattering("progress", 0.0, 3000);
+    for outer_folds in [5, 0] {
+        let params = DiagnoseParams {
+            outer_folds,
+            ..DiagnoseParams::default()
+        };
+        let done = AtomicU64::new(0);
+        let with = load(&path)
+            .unwrap()
+            .diagnose_with_progress(&params, &|n: u64| {
+                done.fetch_add(n, Ordering::Relaxed);
+            })
+            .unwrap();
+        assert_eq!(
+            done.load(Ordering::Relaxed),
+            mte_diagnose::progress_units(&params)
+        );
+        let without = load(&path).unwrap().diagnose(&params).unwrap();
+        assert_eq!(
+            serde_json::to_string(&with).unwrap(),
+            serde_json::to_string(&without).unwrap()
+        );
+    }
+    assert_eq!(mte_diagnose::progress_units(&DiagnoseParams::default()), 8);
+}
+
 /// Runs of a clean axis (a constant 2 µm) stating [`NOISE_UM`], whose readings scatter by
 /// `extra_um` more (independent, from seeds `seed` + reading index).
 fn clean_runs_scattering(name: &str, extra_um: f64, seed: u64) -> common::Dataset {

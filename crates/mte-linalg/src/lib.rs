@@ -10,6 +10,7 @@ pub use geometry::{
 };
 
 pub mod json;
+pub mod progress;
 pub mod stats;
 pub mod text;
 

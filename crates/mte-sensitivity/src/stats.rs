@@ -1,5 +1,6 @@
 //! Small statistics helpers shared by the estimators.
 
+pub use mte_linalg::progress::{NoProgress, Progress};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 
@@ -58,23 +59,4 @@ pub fn spearman(a: &[f64], b: &[f64]) -> f64 {
     let va: f64 = ra.iter().map(|x| (x - ma).powi(2)).sum();
     let vb: f64 = rb.iter().map(|y| (y - mb).powi(2)).sum();
     cov / (va * vb).sqrt()
-}
-
-/// A progress sink: called with the number of work units just finished.
-pub trait Progress: Sync {
-    /// `n` more units done.
-    fn inc(&self, n: u64);
-}
-
-impl<F: Fn(u64) + Sync> Progress for F {
-    fn inc(&self, n: u64) {
-        self(n)
-    }
-}
-
-/// No progress reporting.
-pub struct NoProgress;
-
-impl Progress for NoProgress {
-    fn inc(&self, _n: u64) {}
 }

@@ -4,6 +4,7 @@ pub mod limits;
 pub mod output;
 pub mod plot;
 pub mod problem;
+pub mod progress;
 pub mod report;
 
 /// Everything that can go wrong in a command: the message names the file, line or field.

@@ -36,9 +36,11 @@ pub fn run(args: &Args) -> Result<(), CliError> {
         ..DiagnoseParams::default()
     };
     let title = prepared.title.clone();
-    let diagnosis = prepared
-        .diagnose(&params)
-        .map_err(|e| CliError::Library(e.to_string()))?;
+    // Units: the preparation, the search on all data, each outer fold's search, the final model.
+    let bar = mte::progress::bar(mte_diagnose::progress_units(&params), "diagnosis");
+    let diagnosis = prepared.diagnose_with_progress(&params, &|n: u64| bar.inc(n));
+    bar.finish_and_clear();
+    let diagnosis = diagnosis.map_err(|e| CliError::Library(e.to_string()))?;
     let markdown = report::markdown(&diagnosis, &title);
     let md_path = args.out.join("report.md");
     out.add("report.md", markdown.clone());

@@ -7,7 +7,6 @@
 //! the variance-weighted index of each direction over the points.
 
 use clap::{Args as ClapArgs, ValueEnum};
-use indicatif::{ProgressBar, ProgressDrawTarget};
 use mte::CliError;
 use mte::output::OutDir;
 use mte::plot::{Axis, Interval, error_bar_chart};
@@ -22,7 +21,6 @@ use mte_kinematics::AxisKind;
 use mte_sensitivity::testfn::{GFunction, Ishigami, Linear};
 use mte_sensitivity::{Model, Problem};
 use serde_json::Value;
-use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 
 /// One row of the index table: input name, index values per output, and their intervals.
@@ -637,10 +635,7 @@ fn analyse(args: &Args, v: &Value, st: &Study, path: &Path) -> Result<Indices, C
                 sobol_bytes(&p, problem.dim(), model.n_outputs()),
             )?;
             let total = (p.n * (problem.dim() + 2)) as u64;
-            let bar = ProgressBar::new(total);
-            if !std::io::stderr().is_terminal() {
-                bar.set_draw_target(ProgressDrawTarget::hidden());
-            }
+            let bar = mte::progress::bar(total, "Sobol' model runs");
             let r = mte_sensitivity::sobol::sobol_with_progress(&model, problem, &p, &|n: u64| {
                 bar.inc(n)
             })
