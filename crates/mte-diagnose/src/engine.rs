@@ -638,12 +638,17 @@ pub fn diagnose(
 /// fit and every candidate's products), the search on all data, each outer fold's search, and
 /// the final model with its tests and intervals.
 pub fn progress_units(params: &DiagnoseParams) -> u64 {
-    let outer = if params.outer_folds >= 2 {
+    let outer = if runs_outer_folds(params) {
         params.outer_folds
     } else {
         0
     };
     3 + outer as u64
+}
+
+/// Whether the honest held-out figures' outer folds run (`outer_folds` 0 turns them off).
+fn runs_outer_folds(params: &DiagnoseParams) -> bool {
+    params.outer_folds >= 2
 }
 
 /// [`diagnose`], reporting to `progress` each of its [`progress_units`] as it finishes (the
@@ -719,7 +724,7 @@ pub fn diagnose_with_progress(
         None => Projector::fit(&x_base, &obs_s.values, &w_s),
     };
     // The outer folds of the honest held-out figures ([`Searcher::held_out`]).
-    let outer = (params.outer_folds >= 2).then(|| {
+    let outer = runs_outer_folds(params).then(|| {
         Folds::blocked(
             obs_s,
             &vec![true; n_search],
@@ -960,22 +965,26 @@ fn conclude(
         // the search can fail now (a pitch of X at p = 1.5e-6 in the search, 0.065 once a roll
         // of Y the base and the other causes hold had left): it leaves as pruned, with what
         // builds on it.
-        let finals = searcher.removal_p_values(&chosen, &base_fit, &fit);
-        let leaves = leaving(&held, |k| z(&extended_parameters, &cov, k))
-            .map(|(k, held)| (k, held, false))
-            .or_else(|| least_significant(&finals, params.alpha).map(|k| (k, None, true)));
-        let Some((k, held, insignificant)) = leaves else {
-            break (
-                terms,
-                x,
-                sol,
-                fit,
-                extended,
-                cov,
-                hyper_rows,
-                extended_parameters,
-                finals,
-            );
+        // (The removal tests only once no cause leaves by the rules above.)
+        let (k, held, insignificant) = match leaving(&held, |k| z(&extended_parameters, &cov, k)) {
+            Some((k, held)) => (k, held, false),
+            None => {
+                let finals = searcher.removal_p_values(&chosen, &base_fit, &fit);
+                let Some(k) = least_significant(&finals, params.alpha) else {
+                    break (
+                        terms,
+                        x,
+                        sol,
+                        fit,
+                        extended,
+                        cov,
+                        hyper_rows,
+                        extended_parameters,
+                        finals,
+                    );
+                };
+                (k, None, true)
+            }
         };
         // A cause the base's next orders would hold, or whose size they leave undetermined,
         // rests on the base's orders alone: the report lists it as not separable from them.
