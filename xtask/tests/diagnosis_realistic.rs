@@ -582,15 +582,20 @@ fn pitch_cell_dataset(base_seed: u64, index: usize) -> (f64, mte_diagnose::Diagn
 fn a_component_held_by_another_leaves_and_the_one_that_stays_is_found_again_alone() {
     // Dataset 121 of the axis pitch coverage cell with base seed 3: the search ends with two
     // periodic components at periods that each hold part of the other on these positions; in
-    // the final model the base and one of them hold the other. Then the later one leaves, and
+    // the complete model the base and one of them hold the other (its removal test gives
+    // p = 1). Then the later one leaves, and
     // the one that stays is the pitch itself, its period chosen anew without the other, sized
     // within 2 u. (Dataset 179 of base seed 1 showed this before the completions had spans;
     // no dataset of that cell does now.)
     let (period_mm, d) = pitch_cell_dataset(3, 121);
     let names: Vec<&str> = d.findings.iter().map(|f| f.name.as_str()).collect();
-    // The situation this dataset is kept for: a component left the final model.
+    // The situation this dataset is kept for: a component left the complete model, for its
+    // removal test.
     assert!(
-        d.pruned.iter().any(|p| p == "EXX periodic #2"),
+        d.pruned
+            .iter()
+            .any(|p| p.name == "EXX periodic #2"
+                && matches!(p.reason, mte_diagnose::PruneReason::NotEarned { p_value, .. } if p_value >= 0.001)),
         "no component pruned (the dataset no longer shows the case): {:?}, findings {names:?}",
         d.pruned
     );
@@ -639,7 +644,9 @@ fn every_cause_of_the_final_model_passes_its_removal_test_there() {
     let d = diagnosed(&spec, 51);
     // The situation this dataset is kept for: a cause left the final model.
     assert!(
-        d.pruned.iter().any(|p| p == "EBY poly2"),
+        d.pruned
+            .iter()
+            .any(|p| p.name == "EBY poly2" && p.reason == mte_diagnose::PruneReason::HeldByModel),
         "EBY poly2 not pruned (the dataset no longer shows the case): {:?}",
         d.pruned
     );
@@ -652,7 +659,13 @@ fn every_cause_of_the_final_model_passes_its_removal_test_there() {
             f.p_value_final
         );
     }
-    assert!(d.pruned.iter().any(|p| p == "EBX poly1"), "{:?}", d.pruned);
+    // It leaves for its test, with the p-value the test gave.
+    assert!(
+        d.pruned.iter().any(|p| p.name == "EBX poly1"
+            && matches!(p.reason, mte_diagnose::PruneReason::NotSignificant { p_value } if p_value >= alpha)),
+        "{:?}",
+        d.pruned
+    );
 }
 
 /// The combined study's cell of `kind` (several effects at once) whose last effect is `last`,

@@ -446,6 +446,75 @@ pub struct Exchange {
     pub chi2_drop: f64,
 }
 
+/// A cause the search added and the complete model let go again ([`Diagnosis::pruned`]).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Pruned {
+    /// The cause (`EBY poly2`).
+    pub name: String,
+    /// Why it left.
+    pub reason: PruneReason,
+}
+
+/// Why a cause the search added left the model ([`Pruned`]).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub enum PruneReason {
+    /// Re-tested in the search's complete model, it failed its removal F test (`p_value`,
+    /// Bonferroni-adjusted as at entry, not below the level) or lowered the cross-validated RMS
+    /// by too little (`held_out_ratio`: the RMS without it ÷ with it).
+    NotEarned {
+        /// Adjusted p-value of its removal.
+        p_value: f64,
+        /// Cross-validated RMS without it ÷ with it.
+        held_out_ratio: f64,
+    },
+    /// The search's reduction: the other causes, exchanged, say as well what it said.
+    Redundant,
+    /// In the final model, fitted to all observations, the base and the other causes hold it.
+    HeldByModel,
+    /// In the final model, the next orders of the base's errors would hold it or leave its size
+    /// undetermined (also listed in [`Diagnosis::not_separable`]).
+    RestsOnOrders,
+    /// In the final model, every estimate of it lies within 2 u of zero once the uncertainty of
+    /// its period or time constant is counted.
+    Undetermined,
+    /// In the final model, its removal F test (Bonferroni-adjusted `p_value`) is not below the
+    /// level, after another cause had left.
+    NotSignificant {
+        /// Adjusted p-value of its removal in the final model.
+        p_value: f64,
+    },
+    /// It builds on the cause named (a drift or harmonic of a term), which left.
+    BuildsOn(String),
+}
+
+impl PruneReason {
+    /// The reason in words, for the report.
+    pub fn text(&self) -> String {
+        match self {
+            PruneReason::NotEarned {
+                p_value,
+                held_out_ratio,
+            } => format!(
+                "not earned in the complete model: {}, held-out RMS ×{held_out_ratio:.3} without it",
+                crate::report::p_text(*p_value)
+            ),
+            PruneReason::Redundant => "the other causes say as well what it said".into(),
+            PruneReason::HeldByModel => "the base and the other causes hold it".into(),
+            PruneReason::RestsOnOrders => {
+                "rests on the base's orders (listed as not separable)".into()
+            }
+            PruneReason::Undetermined => {
+                "its size is undetermined once its period or time constant is counted".into()
+            }
+            PruneReason::NotSignificant { p_value } => format!(
+                "no longer significant in the final model, {}",
+                crate::report::p_text(*p_value)
+            ),
+            PruneReason::BuildsOn(cause) => format!("builds on {cause}, which left"),
+        }
+    }
+}
+
 /// A periodic error at a free period along a linear axis that the search passed over: it fitted
 /// the residuals and lowered their held-out RMS, but did not predict the readings at positions
 /// of its axis it was not fitted to ([`Diagnosis::passed_over`]).
@@ -571,8 +640,9 @@ pub struct Diagnosis {
     /// Causes the search chose and replaced in the complete model by a rival that explains the
     /// data better with the others fitted.
     pub exchanged: Vec<Exchange>,
-    /// Causes added by the search and removed again when re-tested in the complete model.
-    pub pruned: Vec<String>,
+    /// Causes added by the search and removed again when re-tested in the complete model, with
+    /// why.
+    pub pruned: Vec<Pruned>,
     /// Periodic errors at a free period that fitted the residuals but did not predict the
     /// readings between the positions they were fitted to: not named.
     pub passed_over: Vec<PassedOver>,
@@ -967,7 +1037,7 @@ fn conclude(
         // builds on it.
         // (The removal tests only once no cause leaves by the rules above.)
         let (k, held, insignificant) = match leaving(&held, |k| z(&extended_parameters, &cov, k)) {
-            Some((k, held)) => (k, held, false),
+            Some((k, held)) => (k, held, None),
             None => {
                 let finals = searcher.removal_p_values(&chosen, &base_fit, &fit);
                 let Some(k) = least_significant(&finals, params.alpha) else {
@@ -983,14 +1053,14 @@ fn conclude(
                         finals,
                     );
                 };
-                (k, None, true)
+                (k, None, Some(finals[k]))
             }
         };
         // A cause the base's next orders would hold, or whose size they leave undetermined,
         // rests on the base's orders alone: the report lists it as not separable from them.
         // (One the base and the other causes hold without those orders — two components of a
         // periodic error drawn to one period — leaves as pruned.)
-        let on_orders = !insignificant
+        let on_orders = insignificant.is_none()
             && match held {
                 Some(held) => held == Held::ByOrders,
                 None => z(&parameters(&terms, &sol.coef, &plain), &plain, k) >= 2.0,
@@ -1026,7 +1096,17 @@ fn conclude(
             });
             rests_on_orders.push(causes[k].name.clone());
         }
-        pruned.extend(searcher.remove(&mut chosen, k, &base_fit, held.is_some() || insignificant));
+        let reason = match (insignificant, held) {
+            (Some(p_value), _) => PruneReason::NotSignificant { p_value },
+            _ if on_orders => PruneReason::RestsOnOrders,
+            (None, Some(_)) => PruneReason::HeldByModel,
+            (None, None) => PruneReason::Undetermined,
+        };
+        let dependents = held.is_some() || insignificant.is_some();
+        pruned.extend(pruned_for(
+            searcher.remove(&mut chosen, k, &base_fit, dependents),
+            reason,
+        ));
     };
     let mut findings: Vec<Finding> = chosen
         .iter()
@@ -2181,7 +2261,7 @@ struct SearchResult {
     not_separable: Vec<NotSeparable>,
     detection_limits: Vec<DetectionLimit>,
     exchanged: Vec<Exchange>,
-    pruned: Vec<String>,
+    pruned: Vec<Pruned>,
     passed_over: Vec<PassedOver>,
     /// The limit that stopped the search, if one did: `true` for the ordinary errors' one.
     hit_limit: Option<bool>,
@@ -3598,7 +3678,7 @@ impl Searcher<'_> {
         chosen: &mut Vec<Chosen>,
         steps: &[Step],
         base_fit: &Projector,
-    ) -> (Vec<Exchange>, Vec<String>) {
+    ) -> (Vec<Exchange>, Vec<Pruned>) {
         let (mut exchanged, mut removed) = (Vec::new(), Vec::new());
         while chosen.len() >= 3 {
             let (_, fit) = self.fit_of(base_fit, &self.with(chosen, None));
@@ -3620,7 +3700,7 @@ impl Searcher<'_> {
                 break;
             };
             *chosen = trial;
-            removed.extend(gone);
+            removed.extend(pruned_for(gone, PruneReason::Redundant));
             exchanged.extend(exchanges);
         }
         (exchanged, removed)
@@ -3701,7 +3781,7 @@ impl Searcher<'_> {
         fold_basis: &FoldBasis,
         base_fit: &Projector,
         last: (DMat, Projector),
-    ) -> Vec<String> {
+    ) -> Vec<Pruned> {
         let y = &self.obs.values;
         let mut pruned = Vec::new();
         let mut last = Some(last);
@@ -3721,8 +3801,17 @@ impl Searcher<'_> {
                     weakest = Some((j, p, ratio));
                 }
             }
-            let Some((j, _, _)) = weakest else { break };
-            pruned.extend(self.remove(chosen, j, base_fit, true));
+            let Some((j, p_value, held_out_ratio)) = weakest else {
+                break;
+            };
+            let gone = self.remove(chosen, j, base_fit, true);
+            pruned.extend(pruned_for(
+                gone,
+                PruneReason::NotEarned {
+                    p_value,
+                    held_out_ratio,
+                },
+            ));
         }
         pruned
     }
@@ -5793,6 +5882,23 @@ fn leaving(held: &[Option<Held>], z: impl Fn(usize) -> f64) -> Option<(usize, Op
         .map(|(k, _)| (k, None))
 }
 
+/// The causes [`Searcher::remove`] took out (`gone`: the one removed, then what builds on it)
+/// with why: the first for `reason`, the others because they build on it.
+fn pruned_for(gone: Vec<String>, reason: PruneReason) -> Vec<Pruned> {
+    let first = gone.first().cloned().unwrap_or_default();
+    gone.into_iter()
+        .enumerate()
+        .map(|(k, name)| Pruned {
+            name,
+            reason: if k == 0 {
+                reason.clone()
+            } else {
+                PruneReason::BuildsOn(first.clone())
+            },
+        })
+        .collect()
+}
+
 /// The cause whose removal from the final model is least significant (the largest of the
 /// Bonferroni-adjusted p-values `finals`, the first of equal ones), if that one is not below
 /// `alpha` ([`conclude`]).
@@ -6616,5 +6722,30 @@ mod tests {
         assert_eq!(least_significant(&[1e-9, 1e-3], 1e-3), Some(1));
         assert_eq!(least_significant(&[1e-9, 9.9e-4], 1e-3), None);
         assert_eq!(least_significant(&[], 1e-3), None);
+    }
+
+    #[test]
+    fn a_pruned_cause_carries_its_reason_and_what_builds_on_it_names_it() {
+        let gone = vec!["EXX offset".to_string(), "EXX offset drift".to_string()];
+        let pruned = pruned_for(gone, PruneReason::NotSignificant { p_value: 0.065 });
+        assert_eq!(
+            pruned,
+            [
+                Pruned {
+                    name: "EXX offset".into(),
+                    reason: PruneReason::NotSignificant { p_value: 0.065 },
+                },
+                Pruned {
+                    name: "EXX offset drift".into(),
+                    reason: PruneReason::BuildsOn("EXX offset".into()),
+                },
+            ]
+        );
+        assert!(
+            pruned[0].reason.text().contains("0.065"),
+            "{}",
+            pruned[0].reason.text()
+        );
+        assert_eq!(pruned[1].reason.text(), "builds on EXX offset, which left");
     }
 }

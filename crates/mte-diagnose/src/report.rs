@@ -389,7 +389,11 @@ pub fn markdown(d: &Diagnosis, title: &str) -> String {
         let _ = writeln!(
             s,
             "Added during the search and removed when re-tested in the complete model: {}.\n",
-            d.pruned.join(", ")
+            d.pruned
+                .iter()
+                .map(|p| format!("{} ({})", p.name, p.reason.text()))
+                .collect::<Vec<_>>()
+                .join("; ")
         );
     }
     if !d.passed_over.is_empty() {
