@@ -446,6 +446,84 @@ pub struct Exchange {
     pub chi2_drop: f64,
 }
 
+/// Terms of the final model whose estimates these data determine only together
+/// ([`Diagnosis::determined_together`]): each is linked to another of the group by estimates
+/// correlated beyond [`TOGETHER_CORRELATION`] in magnitude. What the data measure is a
+/// combination of them; the sizes of each are one split of it among many that fit nearly as
+/// well. (Terms the data cannot separate at all are left out of the fit and listed in
+/// [`Diagnosis::base_not_separable`] or [`Diagnosis::not_separable`].)
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct DeterminedTogether {
+    /// The terms (base parameters, completions, causes), in the model's order.
+    pub terms: Vec<String>,
+    /// The largest |correlation| between estimates of two of them.
+    pub largest_correlation: f64,
+}
+
+/// The |correlation| of two estimates beyond which they are reported as determined only
+/// together: the variance of each is then more than 50 times what it would be were the other
+/// known.
+pub const TOGETHER_CORRELATION: f64 = 0.99;
+
+/// The groups of `terms` (in the order of `cov`'s rows, which may go on with rows of nonlinear
+/// parameters) whose estimates are linked by correlations beyond [`TOGETHER_CORRELATION`]
+/// ([`DeterminedTogether`]), largest group first.
+fn determined_together(terms: &[Term], cov: &DMat) -> Vec<DeterminedTogether> {
+    let term_of: Vec<usize> = terms
+        .iter()
+        .enumerate()
+        .flat_map(|(k, t)| std::iter::repeat_n(k, t.width()))
+        .collect();
+    let p = term_of.len().min(cov.nrows());
+    // Union–find over terms.
+    let mut parent: Vec<usize> = (0..terms.len()).collect();
+    fn root(parent: &mut [usize], mut k: usize) -> usize {
+        while parent[k] != k {
+            parent[k] = parent[parent[k]];
+            k = parent[k];
+        }
+        k
+    }
+    let mut links: Vec<(usize, usize, f64)> = Vec::new();
+    for i in 0..p {
+        for j in i + 1..p {
+            let (a, b) = (term_of[i], term_of[j]);
+            let scale = (cov[(i, i)] * cov[(j, j)]).sqrt();
+            if a == b || scale.is_nan() || scale <= 0.0 {
+                continue;
+            }
+            let r = (cov[(i, j)] / scale).abs();
+            if r >= TOGETHER_CORRELATION {
+                links.push((a, b, r));
+                let (ra, rb) = (root(&mut parent, a), root(&mut parent, b));
+                parent[ra.max(rb)] = ra.min(rb);
+            }
+        }
+    }
+    let mut groups: Vec<DeterminedTogether> = Vec::new();
+    let mut group_of: HashMap<usize, usize> = HashMap::new();
+    for (k, term) in terms.iter().enumerate() {
+        let r = root(&mut parent, k);
+        if r == k && !links.iter().any(|l| l.0 == k || l.1 == k) {
+            continue;
+        }
+        let g = *group_of.entry(r).or_insert_with(|| {
+            groups.push(DeterminedTogether {
+                terms: Vec::new(),
+                largest_correlation: 0.0,
+            });
+            groups.len() - 1
+        });
+        groups[g].terms.push(term.name.clone());
+    }
+    for (a, _, r) in links {
+        let g = group_of[&root(&mut parent, a)];
+        groups[g].largest_correlation = groups[g].largest_correlation.max(r);
+    }
+    groups.sort_by_key(|g| std::cmp::Reverse(g.terms.len()));
+    groups
+}
+
 /// A cause the search added and the complete model let go again ([`Diagnosis::pruned`]).
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Pruned {
@@ -648,6 +726,9 @@ pub struct Diagnosis {
     pub passed_over: Vec<PassedOver>,
     /// Candidates the data cannot separate from the model.
     pub not_separable: Vec<NotSeparable>,
+    /// Groups of the final model's terms whose estimates the data determine only together
+    /// (correlated beyond [`TOGETHER_CORRELATION`]): the sizes are one split of a combination.
+    pub determined_together: Vec<DeterminedTogether>,
     /// For each library cause not found (and separable): the size from which these data would
     /// have shown it. Empty when the search stopped at a limit.
     pub detection_limits: Vec<DetectionLimit>,
@@ -1583,6 +1664,7 @@ fn conclude(
         pruned,
         passed_over: search.passed_over,
         not_separable,
+        determined_together: determined_together(&terms, &cov),
         detection_limits: search.detection_limits,
         extended,
         extended_parameters,
@@ -6722,6 +6804,44 @@ mod tests {
         assert_eq!(least_significant(&[1e-9, 1e-3], 1e-3), Some(1));
         assert_eq!(least_significant(&[1e-9, 9.9e-4], 1e-3), None);
         assert_eq!(least_significant(&[], 1e-3), None);
+    }
+
+    #[test]
+    fn terms_whose_estimates_are_correlated_beyond_the_limit_are_grouped() {
+        // Four one-column terms and a two-column one (rows 4 and 5), then a row of a nonlinear
+        // parameter. A–C at 0.995 and C–E's second column at −0.999 link A, C and E; B–D at
+        // 0.98 stays below the limit, and so does the row beyond the terms (at 1.0 with B).
+        let term = |name: &str| {
+            Term::single(
+                name,
+                "",
+                "",
+                Family::Setup,
+                DVec::zeros(3),
+                Quantity::Length,
+            )
+        };
+        let mut e = term("E");
+        e.columns = DMat::zeros(3, 2);
+        let terms = [term("A"), term("B"), term("C"), term("D"), e];
+        let mut cov = DMat::identity(7, 7);
+        let mut set = |i: usize, j: usize, r: f64| {
+            cov[(i, j)] = r;
+            cov[(j, i)] = r;
+        };
+        set(0, 2, 0.995);
+        set(2, 5, -0.999);
+        set(1, 3, 0.98);
+        set(1, 6, 1.0);
+        set(4, 5, 0.9999);
+        let groups = determined_together(&terms, &cov);
+        assert_eq!(
+            groups,
+            [DeterminedTogether {
+                terms: vec!["A".into(), "C".into(), "E".into()],
+                largest_correlation: 0.999,
+            }]
+        );
     }
 
     #[test]

@@ -18,9 +18,9 @@ pub use candidate::{
 };
 pub use data::{Observations, Variable, VariableKind};
 pub use engine::{
-    Compound, DETECTION_POWER, DetectionLimit, DiagnoseParams, Diagnosis, Exchange, Finding,
-    FirstOrderFit, FitQuality, HeldOut, Outlier, PruneReason, Pruned, Rival, VariantLimit, Verdict,
-    diagnose, diagnose_with_progress, progress_units,
+    Compound, DETECTION_POWER, DetectionLimit, DeterminedTogether, DiagnoseParams, Diagnosis,
+    Exchange, Finding, FirstOrderFit, FitQuality, HeldOut, Outlier, PruneReason, Pruned, Rival,
+    TOGETHER_CORRELATION, VariantLimit, Verdict, diagnose, diagnose_with_progress, progress_units,
 };
 pub use instruments::{load, load_with_noise};
 pub use model::{BaseModelUsed, DriftOf, Effects, ObservationModel, Prepared, prepare};

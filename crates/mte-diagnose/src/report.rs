@@ -478,6 +478,7 @@ pub fn markdown(d: &Diagnosis, title: &str) -> String {
         ": left out of the fit",
     );
     not_separable_section(&mut s, "Not separable with this data", &d.not_separable, "");
+    determined_together_section(&mut s, &d.determined_together);
     detection_limits_section(&mut s, &d.detection_limits);
     let _ = writeln!(s, "\n## Search\n");
     for (k, step) in d.steps.iter().enumerate() {
@@ -543,6 +544,36 @@ fn not_separable_section(
                 .as_ref()
                 .map(|h| format!(" Separate it with {h}."))
                 .unwrap_or_default()
+        );
+    }
+}
+
+/// The groups of terms the data determine only together.
+fn determined_together_section(s: &mut String, groups: &[crate::engine::DeterminedTogether]) {
+    if groups.is_empty() {
+        return;
+    }
+    let _ = writeln!(
+        s,
+        "\n## Determined only together\n\nIn the final model the estimates of each group below are correlated beyond ±{} with another of the group: these data measure a combination of them, and the sizes of each (in the tables and findings above) are one split of it among many that fit nearly as well — a size no machine has is a sign of it. Other set-ups or positions, or a model without some of them, would tell them apart.\n",
+        crate::engine::TOGETHER_CORRELATION
+    );
+    const SHOWN: usize = 12;
+    for g in groups {
+        let more = match g.terms.len().saturating_sub(SHOWN) {
+            0 => String::new(),
+            k => format!(" and {k} more"),
+        };
+        let _ = writeln!(
+            s,
+            "- {}{more} (|correlation| up to {:.4})",
+            g.terms
+                .iter()
+                .take(SHOWN)
+                .cloned()
+                .collect::<Vec<_>>()
+                .join(", "),
+            g.largest_correlation
         );
     }
 }
