@@ -266,6 +266,24 @@ pub fn markdown(d: &Diagnosis, title: &str) -> String {
                     .unwrap_or_default()
             );
         }
+        if let Some(g) = d
+            .determined_together
+            .iter()
+            .find(|g| g.terms.contains(&f.name))
+        {
+            let others: Vec<&str> = g
+                .terms
+                .iter()
+                .filter(|t| **t != f.name)
+                .map(String::as_str)
+                .collect();
+            let _ = writeln!(
+                s,
+                "  Its size is determined only together with: {} (estimates correlated up to {:.4}; see below).",
+                others.join(", "),
+                g.largest_correlation
+            );
+        }
         if !f.rivals.is_empty() {
             let rivals: Vec<String> = f
                 .rivals
