@@ -496,7 +496,7 @@ pub fn markdown(d: &Diagnosis, title: &str) -> String {
         ": left out of the fit",
     );
     not_separable_section(&mut s, "Not separable with this data", &d.not_separable, "");
-    determined_together_section(&mut s, &d.determined_together);
+    determined_together_section(&mut s, d);
     detection_limits_section(&mut s, &d.detection_limits);
     let _ = writeln!(s, "\n## Search\n");
     for (k, step) in d.steps.iter().enumerate() {
@@ -567,13 +567,28 @@ fn not_separable_section(
 }
 
 /// The groups of terms the data determine only together.
-fn determined_together_section(s: &mut String, groups: &[crate::engine::DeterminedTogether]) {
+fn determined_together_section(s: &mut String, d: &Diagnosis) {
+    let groups = &d.determined_together;
     if groups.is_empty() {
         return;
     }
+    // Each term with its size in the final model (the first estimate; "…" where it has more).
+    let sized = |name: &String| {
+        let estimates = d
+            .extended_parameters
+            .iter()
+            .find(|p| p.term == *name)
+            .map(|p| &p.estimates[..])
+            .unwrap_or_default();
+        match estimates {
+            [] => name.clone(),
+            [e] => format!("{} = {}", e.name, e.text),
+            [e, ..] => format!("{} = {} …", e.name, e.text),
+        }
+    };
     let _ = writeln!(
         s,
-        "\n## Determined only together\n\nIn the final model the estimates of each group below are correlated beyond ±{} with another of the group: these data measure a combination of them, and the sizes of each (in the tables and findings above) are one split of it among many that fit nearly as well — a size no machine has is a sign of it. Other set-ups or positions, or a model without some of them, would tell them apart.\n",
+        "\n## Determined only together\n\nIn the final model the estimates of each group below (sizes in that model) are correlated beyond ±{} with another of the group: these data measure a combination of them, and the sizes of each are one split of it among many that fit nearly as well — a size no machine has is a sign of it. Other set-ups or positions, or a model without some of them, would tell them apart.\n",
         crate::engine::TOGETHER_CORRELATION
     );
     const SHOWN: usize = 12;
@@ -588,9 +603,9 @@ fn determined_together_section(s: &mut String, groups: &[crate::engine::Determin
             g.terms
                 .iter()
                 .take(SHOWN)
-                .cloned()
+                .map(sized)
                 .collect::<Vec<_>>()
-                .join(", "),
+                .join("; "),
             g.largest_correlation
         );
     }
