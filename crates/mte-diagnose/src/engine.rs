@@ -503,10 +503,11 @@ fn determined_together(terms: &[Term], cov: &DMat) -> Vec<DeterminedTogether> {
     let mut groups: Vec<DeterminedTogether> = Vec::new();
     let mut group_of: HashMap<usize, usize> = HashMap::new();
     for (k, term) in terms.iter().enumerate() {
-        let r = root(&mut parent, k);
-        if r == k && !links.iter().any(|l| l.0 == k || l.1 == k) {
+        // (A term is in a group exactly when a link names it.)
+        if !links.iter().any(|l| l.0 == k || l.1 == k) {
             continue;
         }
+        let r = root(&mut parent, k);
         let g = *group_of.entry(r).or_insert_with(|| {
             groups.push(DeterminedTogether {
                 terms: Vec::new(),
