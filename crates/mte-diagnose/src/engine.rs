@@ -2724,6 +2724,10 @@ impl Searcher<'_> {
             let mut sensitivity: Vec<Sensitivity<Increment>> = Vec::new();
             for &ci in &eligible {
                 let mut best: Option<(usize, Increment)> = None;
+                // The best of the variants that are an ordinary error (a rotary axis' error
+                // motion at a harmonic up to the components'), graded beside a best variant
+                // that is not ([`is_ordinary`]).
+                let mut best_ordinary: Option<(usize, Increment)> = None;
                 let mut profile: Vec<(usize, f64)> = Vec::new();
                 let tried: Vec<(usize, &Term)> = (0..self.pool.variants[ci].len())
                     .map(|vi| (vi, variants.as_scored(ci, vi)))
@@ -2741,6 +2745,13 @@ impl Searcher<'_> {
                     }
                     energies.push((vi, Some(inc.clone())));
                     profile.push((vi, inc.delta_rss));
+                    if is_ordinary(obs, t)
+                        && best_ordinary
+                            .as_ref()
+                            .is_none_or(|(_, b)| inc.delta_rss > b.delta_rss)
+                    {
+                        best_ordinary = Some((vi, inc.clone()));
+                    }
                     if best
                         .as_ref()
                         .is_none_or(|(_, b)| inc.delta_rss > b.delta_rss)
@@ -2767,6 +2778,14 @@ impl Searcher<'_> {
                     continue;
                 }
                 let peaks = grid_peaks(&profile, vi, inc.delta_rss);
+                // A harmonic of a turn far above what the angles resolve is a pattern of its own
+                // at each handful of angles, and can fit the residuals of a missing error motion
+                // better than the error's own low harmonic (ECC at 105 per turn for its 4th, at
+                // 24 angles jittered about a 30° step): the ordinary harmonic is graded too, so
+                // that it enters before such a pattern, as every ordinary error does.
+                if let Some((vo, ordinary)) = best_ordinary.filter(|(vo, _)| *vo != vi) {
+                    graded.push((ci, vo, ordinary, vec![vo]));
+                }
                 graded.push((ci, vi, inc, peaks));
             }
             // Refining a period or time constant between its grid neighbours is worth it only
