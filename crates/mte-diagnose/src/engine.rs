@@ -429,6 +429,9 @@ pub struct CandidateScore {
     pub share_of_residual: f64,
     /// Cross-validated RMS with it added, mm (for the shortlisted significant ones).
     pub cv_rms: Option<f64>,
+    /// For a harmonic of a turn of a rotary axis, the harmonic (cycles per turn): a rotary
+    /// axis' error motion is scored at its best ordinary harmonic and at its best of all.
+    pub per_turn: Option<usize>,
 }
 
 /// A cause the search had chosen, replaced once the model was complete by one that, with the
@@ -2905,6 +2908,7 @@ impl Searcher<'_> {
                     p_value: p,
                     share_of_residual: share,
                     cv_rms: cv,
+                    per_turn: crate::candidate::per_turn(obs, &t.family, t.exposed_by.as_deref()),
                 });
             }
             // While an ordinary error the base leaves out earns its place, no drift, periodic

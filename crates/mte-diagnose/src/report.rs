@@ -506,8 +506,11 @@ pub fn markdown(d: &Diagnosis, title: &str) -> String {
             .take(4)
             .map(|c| {
                 format!(
-                    "{} ({}{})",
+                    "{}{} ({}{})",
                     c.name,
+                    c.per_turn
+                        .map(|k| format!(" at {k} per turn"))
+                        .unwrap_or_default(),
                     p_text(c.p_value),
                     c.cv_rms
                         .map(|r| format!(", cross-validated {}", level(d.quantity, r)))
