@@ -1075,12 +1075,48 @@ fn power_records(
     base_model: &BaseModel,
     draw: usize,
 ) -> Vec<Record> {
-    let cell = format!("power-{}-{:?}-{size}", kind.name(), effect);
+    let cell = power_cell_name(kind, effect, size);
     run_cell_drawn(&cell, n, base_seed, draw, |rng| {
-        let mut s = Spec::new(kind, &[effect.hidden(size, rng)]);
-        s.base_model = base_model.clone();
-        s
+        power_spec(kind, effect, size, base_model, rng)
     })
+}
+
+/// The name of the power cell of `effect` at `size` on `kind`, from which with the base seed
+/// its datasets' seeds are drawn ([`dataset_seed`]).
+fn power_cell_name(kind: Kind, effect: Effect, size: f64) -> String {
+    format!("power-{}-{:?}-{size}", kind.name(), effect)
+}
+
+/// A power cell's dataset: `effect` at `size` hidden, its other parameters drawn from `rng`,
+/// against `base_model`.
+fn power_spec(
+    kind: Kind,
+    effect: Effect,
+    size: f64,
+    base_model: &BaseModel,
+    rng: &mut ChaCha8Rng,
+) -> Spec {
+    let mut s = Spec::new(kind, &[effect.hidden(size, rng)]);
+    s.base_model = base_model.clone();
+    s
+}
+
+/// Dataset `index` of the power cell of `effect` at `size` on `kind` with base seed
+/// `base_seed` (the power study's, against the user's model lacking the effect:
+/// [`user_model_lacking`]), and its seed.
+pub fn power_dataset(
+    kind: Kind,
+    effect: Effect,
+    size: f64,
+    base_seed: u64,
+    index: usize,
+) -> (Spec, u64) {
+    let seed = dataset_seed(base_seed, &power_cell_name(kind, effect, size), index);
+    let base_model = user_model_lacking(kind, effect);
+    (
+        power_spec(kind, effect, size, &base_model, &mut spec_rng(seed)),
+        seed,
+    )
 }
 
 /// The power table's row of the datasets `records` of `effect` at `size`.

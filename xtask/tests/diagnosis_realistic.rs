@@ -565,13 +565,8 @@ fn an_effect_the_base_orders_could_hold_is_sized_with_them_or_owned_up_to() {
 /// The hidden pitch's true period (mm) and the diagnosis of dataset `index` of the axis' 2 µm
 /// pitch power cell with base seed `base_seed`, against the user's model without it.
 fn pitch_cell_dataset(base_seed: u64, index: usize) -> (f64, mte_diagnose::Diagnosis) {
-    use xtask::realistic::{Hidden, Spec};
-    let seed = studies::dataset_seed(base_seed, "power-axis-Pitch-2", index);
-    let mut spec = Spec::new(
-        Kind::Axis,
-        &[Effect::Pitch.hidden(2.0, &mut studies::spec_rng(seed))],
-    );
-    spec.base_model = studies::user_model_lacking(Kind::Axis, Effect::Pitch);
+    use xtask::realistic::Hidden;
+    let (spec, seed) = studies::power_dataset(Kind::Axis, Effect::Pitch, 2.0, base_seed, index);
     let &[Hidden::Pitch { period_mm, .. }] = &spec.hidden[..] else {
         panic!("a pitch: {:?}", spec.hidden);
     };
@@ -758,13 +753,10 @@ fn a_harmonic_of_c_the_angles_cannot_resolve_does_not_stand_in_for_a_low_one() {
     // 7.5 ± 0.19 µrad, by the finding nearest it, against the true 10). Its ordinary harmonics
     // are graded apart now and enter first, as every ordinary error does.
     use std::f64::consts::TAU;
-    let cell = "power-points-AngularPositioning-10";
     let work = std::env::temp_dir().join(format!("mte-test-ecc-{}", std::process::id()));
     for index in [35, 48] {
-        let seed = studies::dataset_seed(1, cell, index);
-        let hidden = Effect::AngularPositioning.hidden(10.0, &mut studies::spec_rng(seed));
-        let mut spec = xtask::realistic::Spec::new(Kind::Points, &[hidden]);
-        spec.base_model = studies::user_model_lacking(Kind::Points, Effect::AngularPositioning);
+        let (spec, seed) =
+            studies::power_dataset(Kind::Points, Effect::AngularPositioning, 10.0, 1, index);
         let r = studies::run_one(&spec, index, seed, &work);
         let o = r.outcome.as_ref().unwrap();
         let names: Vec<(&str, Option<f64>)> = o
@@ -941,10 +933,7 @@ fn a_drift_found_linear_states_a_change_that_holds_the_curve_it_may_have() {
     // tool's Z, the first-order form not earning its time constant. The straight line's change
     // over the record misses the curve's by more than 2 u; its 95 % interval, by the profile over
     // the time constant that admits the curve, holds it.
-    let seed = studies::dataset_seed(1, "power-rtest-ac-SpindleDrift-2", 4);
-    let hidden = Effect::SpindleDrift.hidden(2.0, &mut studies::spec_rng(seed));
-    let mut spec = xtask::realistic::Spec::new(Kind::RtestAc, &[hidden]);
-    spec.base_model = studies::user_model_lacking(Kind::RtestAc, Effect::SpindleDrift);
+    let (spec, seed) = studies::power_dataset(Kind::RtestAc, Effect::SpindleDrift, 2.0, 1, 4);
     let (truth, d) = truth_and_diagnosis(&spec, seed, true);
     let truth = truth.effects[0]
         .drift
